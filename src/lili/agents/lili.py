@@ -1,0 +1,111 @@
+"""LILI: SAC conditioned on a latent strategy z^i = E(tau^{i-1}) learnt by predicting tau^i.
+
+Exactly the semantics of DESIGN.md "LILI semantics":
+
+- Encoder E (2x128, latent 8): the transitions (s, a, r, s') of the last N interactions -> z,
+  deterministic and permutation-invariant within an interaction (per-transition MLP, masked
+  mean). Each transition also carries its phase t/H and a last-step flag, so that E can single
+  out how the interaction ended (that is what the partner reacts to) without losing
+  permutation invariance.
+- Decoder D (2x128): (s_t, a_t, z^i) -> Gaussian (unit variance in normalised units) over
+  (s_{t+1} - s_t, r_t); J_rep is its log-likelihood on tau^i's transitions under
+  z^i = E(tau^{i-1}).
+- Actor pi(a | s, z) and twin critic Q(s, a, z): the encoder learns from J_rep and from the
+  critic loss; the actor sees z detached.
+- Acting: z^1 = 0; after interaction i ends, z^{i+1} = E(tau^i) is held for all of i+1.
+- Critic target at the last step of interaction i: LILI (influence) bootstraps from the first
+  observation of i+1 with z^{i+1} = E(tau^i); LILI (no influence) uses y = r.
+
+Latents inside the critic target come from a Polyak-averaged copy of the encoder (see
+``AgentConfig.target_encoder``).
+"""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import jax
+import jax.numpy as jnp
+
+from lili.agents.sac import SAC, Params, sg
+from lili.config import AgentConfig
+from lili.nets import Decoder, Encoder
+
+__all__ = ["LILI"]
+
+
+class LILI(SAC):
+    """Learning and Influencing Latent Intent (Xie et al., CoRL 2020).
+
+    ``LILI(env)`` optimises reward across interactions (it learns to influence the partner);
+    ``LILI(env, influence=False)`` is the paper's greedy "LILI (no influence)".
+    """
+
+    uses_latent = True
+    default_boundary = "influence"
+
+    def __init__(self, env: gym.Env, config: AgentConfig | dict | None = None, seed: int = 0,
+                 influence: bool = True) -> None:
+        if not isinstance(influence, bool):
+            raise ValueError(f"influence={influence!r} is invalid; allowed: True or False")
+        self.influence = influence
+        self.algo = "lili" if influence else "lili-no-influence"
+        if not influence:
+            self.default_boundary = "cut"
+        super().__init__(env, config, seed)
+
+    def _latent_param_names(self) -> tuple[str, ...]:
+        return ("encoder", "decoder")
+
+    def _build(self) -> None:
+        super()._build()
+        cfg = self.config
+        self.encoder = Encoder(cfg.enc_hidden, cfg.latent_dim)
+        self.decoder = Decoder(cfg.enc_hidden, self.obs_dim + 1)
+        self.feat_dim = 3 * self.obs_dim + self.act_dim + 3
+
+    def _init_latent(self, key: jax.Array) -> dict[str, Params]:
+        ke, kd = jax.random.split(key)
+        n, h = self.history, self.horizon
+        enc = self.encoder.init(ke, jnp.zeros((1, n, h, self.feat_dim)), jnp.ones((1, n, h)))
+        dec = self.decoder.init(kd, jnp.zeros((1, self.obs_dim)), jnp.zeros((1, self.act_dim)),
+                                jnp.zeros((1, self.latent_dim)))
+        return {"encoder": enc, "decoder": dec}
+
+    def _features(self, norm: dict, win: dict) -> jax.Array:
+        """Per-transition encoder input from window fields shaped [..., H, ...]."""
+        obs, nxt = win["obs"], win["next_obs"]
+        s = (obs - norm["obs_mean"]) / norm["obs_std"]
+        s2 = (nxt - norm["obs_mean"]) / norm["obs_std"]
+        d = (nxt - obs - norm["delta_mean"]) / norm["delta_std"]
+        r = (win["rew"] - norm["rew_mean"]) / norm["rew_std"]
+        valid = win["valid"]
+        h = valid.shape[-1]
+        phase = jnp.broadcast_to(jnp.arange(h, dtype=jnp.float32) / h, valid.shape)
+        nxt_valid = jnp.concatenate([valid[..., 1:], jnp.zeros_like(valid[..., :1])], -1)
+        last = (valid & ~nxt_valid).astype(jnp.float32)
+        return jnp.concatenate(
+            [s, win["act"], r[..., None], d, s2, phase[..., None], last[..., None]], -1)
+
+    def _encode(self, enc: Params, norm: dict, win: dict) -> jax.Array:
+        return self.encoder.apply(enc, self._features(norm, win), win["valid"])
+
+    def _latents(self, model: Params, target: Params, norm: dict, batch: dict):
+        win = batch["window"]
+        prev = {k: v[:, :-1] for k, v in win.items()}
+        nxt = {k: v[:, 1:] for k, v in win.items()}
+        z = self._encode(model["encoder"], norm, prev)
+        enc_t = target["encoder"] if self.config.target_encoder else sg(model["encoder"])
+        return z, self._encode(enc_t, norm, prev), self._encode(enc_t, norm, nxt)
+
+    def _rep_loss(self, model: Params, norm: dict, batch: dict, z: jax.Array) -> jax.Array:
+        s = (batch["obs"] - norm["obs_mean"]) / norm["obs_std"]
+        d = (batch["next_obs"] - batch["obs"] - norm["delta_mean"]) / norm["delta_std"]
+        r = (batch["rew"] - norm["rew_mean"]) / norm["rew_std"]
+        zb = jnp.broadcast_to(z[:, None, :], (*s.shape[:-1], z.shape[-1]))
+        pred = self.decoder.apply(model["decoder"], s, batch["act"], zb)
+        err = pred - jnp.concatenate([d, r[..., None]], -1)
+        return 0.5 * (err ** 2).sum(-1).mean()
+
+    def _act_latent(self, model: Params, norm: dict, window: dict) -> jax.Array:
+        batched = {k: v[None] for k, v in window.items()}
+        return self._encode(model["encoder"], norm, batched)[0]

@@ -1,0 +1,141 @@
+"""InteractionBuffer: interactions stored in the order they happened.
+
+Storage is a ring of ``capacity`` interactions, each padded to the horizon H with a ``valid``
+mask, plus each interaction's successor's first observation (what the critic bootstraps from at
+the interaction boundary). Interactions are addressed by their logical index k (0, 1, 2, ...);
+interaction k lives in slot ``k % capacity``.
+
+Sampling (:func:`sample`) is a pure JAX function of the arrays and a key, so it runs inside the
+fused update block and a seed fixes it. A batch holds ``n_interactions`` interaction indices k and
+``per_interaction`` transitions of each, plus the window of interactions k-N .. k that the
+latent needs: tau^{k-N..k-1} (encoder input for z^k) and tau^{k-N+1..k} (for z^{k+1}).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+__all__ = ["InteractionBuffer", "sample"]
+
+FIELDS = ("obs", "act", "rew", "next_obs", "valid")
+
+
+class InteractionBuffer:
+    """Host-side storage of whole interactions (see the module docstring)."""
+
+    def __init__(self, capacity: int, horizon: int, obs_dim: int, act_dim: int) -> None:
+        if capacity < 2:
+            raise ValueError(f"buffer capacity={capacity} is invalid; allowed: an integer >= 2")
+        self.capacity, self.horizon = int(capacity), int(horizon)
+        self.obs_dim, self.act_dim = int(obs_dim), int(act_dim)
+        c, h = self.capacity, self.horizon
+        self.arrays: dict[str, np.ndarray] = {
+            "obs": np.zeros((c, h, obs_dim), np.float32),
+            "act": np.zeros((c, h, act_dim), np.float32),
+            "rew": np.zeros((c, h), np.float32),
+            "next_obs": np.zeros((c, h, obs_dim), np.float32),
+            "valid": np.zeros((c, h), bool),
+            "length": np.zeros((c,), np.int32),
+            "next_first_obs": np.zeros((c, obs_dim), np.float32),
+        }
+        self.count = 0
+
+    def add(self, traj: dict[str, np.ndarray], next_first_obs: np.ndarray) -> int:
+        """Store one finished interaction; return its logical index.
+
+        ``traj`` holds ``obs``, ``act``, ``rew``, ``next_obs`` with the interaction's length as
+        leading dimension (1 .. H).
+        """
+        n = len(traj["rew"])
+        if not 1 <= n <= self.horizon:
+            raise ValueError(f"interaction length {n} is outside 1..{self.horizon}")
+        slot = self.count % self.capacity
+        a = self.arrays
+        for key in ("obs", "act", "rew", "next_obs"):
+            a[key][slot] = 0
+            a[key][slot, :n] = traj[key]
+        a["valid"][slot] = np.arange(self.horizon) < n
+        a["length"][slot] = n
+        a["next_first_obs"][slot] = next_first_obs
+        self.count += 1
+        return self.count - 1
+
+    def window(self, end: int, n: int) -> dict[str, np.ndarray]:
+        """Interactions end-n+1 .. end as [n, H, ...] arrays (missing ones fully masked)."""
+        idx = np.arange(end - n + 1, end + 1)
+        ok = (idx >= 0) & (idx > self.count - 1 - self.capacity) & (idx < self.count)
+        slots = np.mod(idx, self.capacity)
+        out = {k: self.arrays[k][slots] for k in FIELDS}
+        out["valid"] = out["valid"] & ok[:, None]
+        return out
+
+    def state_dict(self) -> dict[str, Any]:
+        """Arrays for a checkpoint (only the filled slots)."""
+        filled = min(self.count, self.capacity)
+        d: dict[str, Any] = {k: v[:filled] for k, v in self.arrays.items()}
+        d["count"] = np.array(self.count)
+        return d
+
+    def load_state_dict(self, d: dict[str, Any]) -> None:
+        filled = min(int(d["count"]), self.capacity)
+        for k, v in self.arrays.items():
+            if d[k].shape[1:] != v.shape[1:] or d[k].shape[0] != filled:
+                raise ValueError(f"checkpoint buffer field {k!r} has shape {d[k].shape}; "
+                                 f"expected ({filled}, {', '.join(map(str, v.shape[1:]))})")
+            v[:filled] = d[k]
+        self.count = int(d["count"])
+
+
+def _gather_window(arrays: dict[str, jax.Array], count: jax.Array, idx: jax.Array):
+    """Interactions at logical indices ``idx`` (any shape) with out-of-range ones masked."""
+    capacity = arrays["rew"].shape[0]
+    ok = (idx >= 0) & (idx > count - 1 - capacity) & (idx < count)
+    slots = jnp.mod(idx, capacity)
+    out = {k: arrays[k][slots] for k in FIELDS}
+    out["valid"] = out["valid"] & ok[..., None]
+    return out
+
+
+def sample(
+    arrays: dict[str, jax.Array],
+    count: jax.Array,
+    key: jax.Array,
+    n_interactions: int,
+    per_interaction: int,
+    history: int = 0,
+) -> dict[str, jax.Array]:
+    """Sample a batch (pure JAX; see the module docstring).
+
+    ``history`` = N: how many preceding interactions the latent needs (0 for agents without a
+    latent). Only interactions k >= N (and still fully stored with their N predecessors) are
+    drawn. Returns transitions shaped [n_interactions, per_interaction, ...] with their step
+    index ``t`` and ``last`` flag, ``next_first_obs`` [n_interactions, obs_dim], and, when
+    N > 0, ``window`` with fields shaped [n_interactions, N + 1, H, ...] for k-N .. k.
+    """
+    capacity = arrays["rew"].shape[0]
+    k_key, t_key = jax.random.split(key)
+    lo = jnp.maximum(history, count - capacity + history)
+    k = lo + jax.random.randint(k_key, (n_interactions,), 0, jnp.maximum(count - lo, 1))
+    slot = jnp.mod(k, capacity)
+    length = arrays["length"][slot]
+    u = jax.random.uniform(t_key, (n_interactions, per_interaction))
+    t = jnp.minimum((u * length[:, None]).astype(jnp.int32), length[:, None] - 1)
+    rows = slot[:, None]
+    batch = {
+        "obs": arrays["obs"][rows, t],
+        "act": arrays["act"][rows, t],
+        "rew": arrays["rew"][rows, t],
+        "next_obs": arrays["next_obs"][rows, t],
+        "t": t,
+        "last": t == length[:, None] - 1,
+        "next_first_obs": arrays["next_first_obs"][slot],
+        "index": k,
+    }
+    if history > 0:
+        idx = k[:, None] + jnp.arange(-history, 1)[None, :]
+        batch["window"] = _gather_window(arrays, count, idx)
+    return batch

@@ -1,0 +1,429 @@
+"""Check that an env honours the repeated-interaction contract (``lili check-env``).
+
+:func:`check_env` is for users' own envs: an env that passes it trains with every algorithm in
+the library with no other change. It raises :class:`EnvContractError` with one message that
+names what broke and what the contract (``/DESIGN.md``, "Environment contract") requires.
+
+:func:`load_env_class` turns ``"package.module:ClassName"`` or a registered Gymnasium id into a
+callable that makes envs, so that the CLI can check and train an env named on the command line.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils.env_checker import check_env as gym_check_env
+
+from lili.envs.core import ENV_ALIASES, RepeatedInteractionEnv, register_envs
+from lili.envs.wrappers import OracleObservation
+
+__all__ = ["EnvContractError", "check_env", "load_env_class"]
+
+EnvFactory = Callable[..., gym.Env]
+
+_DETERMINISM_HINT = (
+    "reset(seed=s) restarts the whole sequence (interaction 0, fresh partner) deterministically "
+    "from s: draw all randomness, the partner's included, from self.np_random (seeded by "
+    "super().reset(seed=seed)), never from the global np.random or an unseeded generator"
+)
+
+
+class EnvContractError(ValueError):
+    """An env breaks the repeated-interaction contract; the message says what and what is needed."""
+
+
+@dataclass
+class _Interaction:
+    """What one interaction produced: observations (reset first), rewards and strategies."""
+
+    obs: list[np.ndarray] = field(default_factory=list)
+    rewards: list[float] = field(default_factory=list)
+    strategies: list[np.ndarray] = field(default_factory=list)
+
+
+def check_env(
+    env_or_factory: gym.Env | EnvFactory | str, n_interactions: int = 6, seed: int = 0
+) -> None:
+    """Raise :class:`EnvContractError` unless the env honours the repeated-interaction contract.
+
+    ``env_or_factory`` is an env instance, a callable returning a fresh env (a class, a
+    ``functools.partial`` of ``gymnasium.make``, a lambda) or a spec for :func:`load_env_class`.
+    With a factory, Gymnasium's checker and the contract checks each get a fresh env, and the
+    envs are closed afterwards; an instance is used as is and left open.
+
+    Checks, in order (the first failure is raised):
+
+    1. Not wrapped in :class:`OracleObservation` (it appends the strategy to the observation) and
+       no ``TimeLimit`` shorter than ``horizon`` (it would cut interactions short, so the partner
+       would never update).
+    2. ``env.unwrapped`` is a ``gymnasium.Env`` with a ``strategy_space`` (a 1-D float ``Box``)
+       and an integer ``horizon >= 1``. Subclassing :class:`RepeatedInteractionEnv` is not
+       required: other envs are checked for the same attributes (duck typing).
+    3. The observation space is a flat float ``Box`` and the action space a ``Box`` with finite
+       bounds (the agents emit continuous, squashed actions).
+    4. ``gymnasium.utils.env_checker.check_env(env.unwrapped, skip_render_check=True)`` passes.
+    5. ``reset(seed=seed)`` and then ``n_interactions`` interactions (``reset()`` without a seed
+       between them) under fixed pseudo-random actions from ``np.random.default_rng(seed)``:
+       every reset and step returns ``info["strategy"]`` (float32, shape and bounds of
+       ``strategy_space``), ``info["strategy_id"]`` (int) and ``info["interaction"]`` (0 after
+       the seeded reset, +1 per reset without a seed); observations lie in the observation
+       space; rewards are finite; every interaction ends (terminated or truncated) within
+       ``horizon`` steps; ``info["success"]``, where present, is a bool.
+    6. The strategy (and its id) is the same on the reset and on every step of an interaction.
+    7. A second ``reset(seed=seed)`` with the same actions replays the first run: the same
+       observations, rewards and strategies (``np.allclose``) and interaction lengths.
+    8. The strategy does not leak into the observation. Heuristic: over all resets and steps of
+       the run, an observation dimension j that equals (``np.allclose``) a strategy dimension k
+       at every step, while strategy k took more than one value across the interactions, is a
+       leak. Transformed copies (scaled, shifted, one-hot) are not detected. If no strategy
+       dimension varied during the run the check cannot tell and a ``UserWarning`` says so.
+
+    ``n_interactions`` must be an integer >= 2 (one change of strategy needs two interactions).
+    """
+    if isinstance(n_interactions, bool) or not isinstance(n_interactions, (int, np.integer)) \
+            or n_interactions < 2:
+        raise ValueError(f"n_interactions={n_interactions!r} is invalid; allowed: an integer >= 2")
+    if isinstance(env_or_factory, str):
+        env_or_factory = load_env_class(env_or_factory)
+
+    owned: list[gym.Env] = []
+    try:
+        env = _obtain(env_or_factory, owned)
+        name = type(env.unwrapped).__name__ if isinstance(env, gym.Env) else type(env).__name__
+        _check_wrappers(env, name)
+        inner = env.unwrapped
+        horizon = _check_attributes(inner, name)
+        _check_time_limit(env, horizon, name)
+        _check_spaces(env, name)
+
+        # Gymnasium's checker reseeds and steps the env in ways of its own; with a factory it
+        # gets a fresh env so that a failure there cannot be blamed on our runs or vice versa.
+        is_factory = not isinstance(env_or_factory, gym.Env)
+        gym_env = _obtain(env_or_factory, owned) if is_factory else env
+        _run_gym_checker(gym_env.unwrapped, name)
+
+        rng = np.random.default_rng(seed)
+        space = env.action_space
+        low = np.broadcast_to(space.low, space.shape)
+        high = np.broadcast_to(space.high, space.shape)
+        actions = rng.uniform(low, high, size=(n_interactions, horizon, *space.shape))
+        actions = actions.astype(space.dtype)
+
+        first = _rollout(env, inner, seed, actions, name)
+        replay = _rollout(env, inner, seed, actions, name)
+        _check_replay(first, replay, seed, name)
+        _check_no_leak(first, name)
+    finally:
+        for made in owned:
+            try:
+                made.close()
+            except Exception:  # closing is best effort; the check's verdict stands
+                pass
+
+
+def load_env_class(spec: str) -> EnvFactory:
+    """Resolve ``spec`` to a callable that makes envs (keyword arguments go to the env).
+
+    ``spec`` is ``"package.module:ClassName"`` (a dotted attribute after the colon is allowed;
+    so is Gymnasium's ``"package.module:EnvId-v0"``, which imports the module so that it
+    registers the id), a registered Gymnasium id (``"lili/PointMass-v0"``) or one of the
+    library's short aliases (``"point-mass"``). Gymnasium ids resolve to a partial of
+    ``gymnasium.make``. Raises ``ValueError`` naming the bad value when the module, the
+    attribute or the id does not exist.
+    """
+    if not isinstance(spec, str) or not spec.strip():
+        raise ValueError(
+            f"env spec {spec!r} is invalid; allowed: 'package.module:ClassName' or a registered "
+            f"gymnasium id"
+        )
+    register_envs()
+    if ":" in spec:
+        module_name, _, attr = spec.partition(":")
+        if not module_name or not attr:
+            raise ValueError(
+                f"env spec {spec!r} is malformed; expected 'package.module:ClassName'"
+            )
+        try:
+            module = importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            raise ValueError(
+                f"env spec {spec!r}: cannot import module {module_name!r} ({exc})"
+            ) from exc
+        obj: Any = module
+        try:
+            for part in attr.split("."):
+                obj = getattr(obj, part)
+        except AttributeError:
+            if attr in gym.registry:
+                return functools.partial(gym.make, attr)
+            raise ValueError(
+                f"env spec {spec!r}: module {module_name!r} has no attribute {attr!r}"
+            ) from None
+        if not callable(obj):
+            raise ValueError(
+                f"env spec {spec!r}: {attr!r} is a {type(obj).__name__}, not a class or "
+                f"function that makes envs"
+            )
+        return obj
+    env_id = ENV_ALIASES.get(spec, spec)
+    if env_id in gym.registry:
+        return functools.partial(gym.make, env_id)
+    known = sorted(ENV_ALIASES) + sorted(ENV_ALIASES.values())
+    raise ValueError(
+        f"unknown env {spec!r}: not 'package.module:ClassName' and not a registered gymnasium "
+        f"id; the library's envs: {', '.join(known)}"
+    )
+
+
+# -- the individual checks -----------------------------------------------------------------------
+
+
+def _fail(name: str, what: str, required: str) -> EnvContractError:
+    return EnvContractError(f"{name}: {what}. The contract requires: {required}.")
+
+
+def _obtain(env_or_factory: gym.Env | EnvFactory, owned: list[gym.Env]) -> gym.Env:
+    """The env itself, or a fresh one from the factory (remembered in ``owned`` to close)."""
+    if isinstance(env_or_factory, gym.Env):
+        return env_or_factory
+    if not callable(env_or_factory):
+        raise EnvContractError(
+            f"{env_or_factory!r} is neither a gymnasium.Env nor a callable that returns one"
+        )
+    try:
+        env = env_or_factory()
+    except Exception as exc:
+        raise EnvContractError(
+            f"the env factory {env_or_factory!r} raised {type(exc).__name__}: {exc}"
+        ) from exc
+    if not isinstance(env, gym.Env):
+        raise EnvContractError(
+            f"the env factory {env_or_factory!r} returned a {type(env).__name__}; the contract "
+            f"requires a gymnasium.Env (one episode = one interaction)"
+        )
+    owned.append(env)
+    return env
+
+
+def _wrapper_chain(env: gym.Env) -> list[gym.Env]:
+    chain = [env]
+    while isinstance(chain[-1], gym.Wrapper):
+        chain.append(chain[-1].env)
+    return chain
+
+
+def _check_wrappers(env: gym.Env, name: str) -> None:
+    if not isinstance(env, gym.Env):
+        raise _fail(name, f"the env is a {type(env).__name__}, not a gymnasium.Env",
+                    "a gymnasium.Env where one episode is one interaction")
+    if any(isinstance(layer, OracleObservation) for layer in _wrapper_chain(env)):
+        raise _fail(
+            name, "the env is wrapped in OracleObservation, which appends the strategy to the "
+            "observation", "observations without the strategy; pass the env without "
+            "OracleObservation (the Oracle baseline adds it itself)")
+
+
+def _check_attributes(inner: gym.Env, name: str) -> int:
+    """Check ``strategy_space`` and ``horizon`` on the unwrapped env; return the horizon."""
+    subclass = isinstance(inner, RepeatedInteractionEnv)
+    how = "" if subclass else " (it does not subclass RepeatedInteractionEnv, so it must define " \
+        "the same attributes itself)"
+    try:
+        strategy_space = inner.strategy_space  # type: ignore[attr-defined]
+    except Exception as exc:  # a subclass without a partner raises here, not AttributeError only
+        raise _fail(name, f"env.unwrapped.strategy_space is missing{how} "
+                    f"({type(exc).__name__}: {exc})",
+                    "a strategy_space attribute, a gymnasium.spaces.Box of the strategy vector "
+                    "reported in info['strategy']") from exc
+    if not isinstance(strategy_space, spaces.Box) or len(strategy_space.shape) != 1 \
+            or not np.issubdtype(strategy_space.dtype, np.floating):
+        raise _fail(name, f"strategy_space is {strategy_space!r}{how}",
+                    "strategy_space to be a 1-D float gymnasium.spaces.Box (the strategy is a "
+                    "fixed size float32 vector)")
+    horizon = getattr(inner, "horizon", None)
+    if isinstance(horizon, bool) or not isinstance(horizon, (int, np.integer)) or horizon < 1:
+        raise _fail(name, f"env.unwrapped.horizon is {horizon!r}{how}",
+                    "an integer horizon >= 1, the most steps an interaction can take")
+    return int(horizon)
+
+
+def _check_time_limit(env: gym.Env, horizon: int, name: str) -> None:
+    for layer in _wrapper_chain(env):
+        limit = getattr(layer, "_max_episode_steps", None)
+        if isinstance(layer, gym.wrappers.TimeLimit) and limit is not None and limit < horizon:
+            raise _fail(
+                name, f"a TimeLimit wrapper cuts episodes at {limit} steps, before the env's "
+                f"horizon={horizon}", "that the env ends its own interactions (so the partner "
+                "updates inside the env); register it without max_episode_steps or with "
+                "max_episode_steps >= horizon")
+
+
+def _check_spaces(env: gym.Env, name: str) -> None:
+    obs_space, act_space = env.observation_space, env.action_space
+    if not isinstance(obs_space, spaces.Box) or len(obs_space.shape) != 1 \
+            or not np.issubdtype(obs_space.dtype, np.floating):
+        raise _fail(name, f"the observation space is {obs_space!r}",
+                    "a flat (1-D) float gymnasium.spaces.Box observation space (the agents' "
+                    "networks take a vector)")
+    if not isinstance(act_space, spaces.Box) or not np.issubdtype(act_space.dtype, np.floating):
+        raise _fail(name, f"the action space is {act_space!r}",
+                    "a float gymnasium.spaces.Box action space (the agents emit continuous "
+                    "actions)")
+    if not (np.all(np.isfinite(act_space.low)) and np.all(np.isfinite(act_space.high))):
+        raise _fail(name, f"the action space {act_space!r} has infinite bounds",
+                    "finite action bounds (the agents squash actions into them)")
+
+
+def _run_gym_checker(inner: gym.Env, name: str) -> None:
+    try:
+        gym_check_env(inner, skip_render_check=True)
+    except Exception as exc:
+        detail = str(exc).strip() or "(no message)"
+        required = "a valid gymnasium.Env (gymnasium.utils.env_checker.check_env passes)"
+        if "determinis" in detail.lower():
+            required = f"{required}; {_DETERMINISM_HINT}"
+        raise _fail(name, f"gymnasium's env checker failed: {type(exc).__name__}: {detail}",
+                    required) from exc
+
+
+def _check_info(info: Any, inner: gym.Env, index: int, where: str, name: str) -> np.ndarray:
+    """Check the contract's info keys on one reset or step; return the strategy."""
+    if not isinstance(info, dict):
+        raise _fail(name, f"{where}: info is a {type(info).__name__}", "info to be a dict")
+    missing = [key for key in ("strategy", "strategy_id", "interaction") if key not in info]
+    if missing:
+        raise _fail(name, f"{where}: info lacks {', '.join(repr(k) for k in missing)}",
+                    "info['strategy'], info['strategy_id'] and info['interaction'] on every "
+                    "reset and step")
+    strategy = info["strategy"]
+    space: spaces.Box = inner.strategy_space  # type: ignore[attr-defined]
+    if not isinstance(strategy, np.ndarray) or strategy.dtype != np.float32 \
+            or strategy.shape != space.shape:
+        described = (f"{type(strategy).__name__} of dtype {strategy.dtype} and shape "
+                     f"{strategy.shape}" if isinstance(strategy, np.ndarray) else repr(strategy))
+        raise _fail(name, f"{where}: info['strategy'] is a {described}",
+                    f"info['strategy'] to be a float32 np.ndarray of shape {space.shape} "
+                    f"(strategy_space.shape)")
+    if not (np.all(np.isfinite(strategy)) and np.all(strategy >= space.low)
+            and np.all(strategy <= space.high)):
+        raise _fail(name, f"{where}: info['strategy'] = {strategy} is outside strategy_space "
+                    f"[{space.low}, {space.high}]", "the strategy to lie in strategy_space")
+    sid = info["strategy_id"]
+    if isinstance(sid, bool) or not isinstance(sid, (int, np.integer)):
+        raise _fail(name, f"{where}: info['strategy_id'] is {sid!r}",
+                    "info['strategy_id'] to be an int (a discrete label, -1 where none exists)")
+    got = info["interaction"]
+    if isinstance(got, bool) or not isinstance(got, (int, np.integer)) or got != index:
+        raise _fail(name, f"{where}: info['interaction'] is {got!r}, expected {index}",
+                    "info['interaction'] = 0 after reset(seed=...) and one more for every "
+                    "reset() without a seed")
+    return strategy.copy()
+
+
+def _rollout(env: gym.Env, inner: gym.Env, seed: int, actions: np.ndarray,
+             name: str) -> list[_Interaction]:
+    """``reset(seed)`` and then one interaction per row of ``actions``, checking as it goes."""
+    horizon = actions.shape[1]
+    run: list[_Interaction] = []
+    for i in range(actions.shape[0]):
+        where = f"interaction {i}, reset"
+        try:
+            obs, info = env.reset(seed=seed) if i == 0 else env.reset()
+        except Exception as exc:
+            raise _fail(name, f"{where}: reset raised {type(exc).__name__}: {exc}",
+                        "reset() to start the next interaction") from exc
+        strategy = _check_info(info, inner, i, where, name)
+        sid = info["strategy_id"]
+        _check_obs(env, obs, where, name)
+        record = _Interaction([np.asarray(obs).copy()], [], [strategy])
+        ended = False
+        for t in range(horizon):
+            where = f"interaction {i}, step {t + 1}"
+            try:
+                obs, reward, terminated, truncated, info = env.step(actions[i, t])
+            except Exception as exc:
+                raise _fail(name, f"{where}: step raised {type(exc).__name__}: {exc}",
+                            f"step() to accept actions from the action space for up to "
+                            f"horizon={horizon} steps") from exc
+            step_strategy = _check_info(info, inner, i, where, name)
+            if not np.array_equal(step_strategy, strategy) or info["strategy_id"] != sid:
+                raise _fail(
+                    name, f"{where}: the strategy changed within the interaction (reset: "
+                    f"{strategy}, id {sid}; now: {step_strategy}, id {info['strategy_id']})",
+                    "a strategy fixed during an interaction; the partner updates only when an "
+                    "interaction ends, and the new strategy shows on the next reset")
+            _check_obs(env, obs, where, name)
+            if not np.isfinite(reward):
+                raise _fail(name, f"{where}: reward is {reward!r}", "finite rewards")
+            if "success" in info and not isinstance(info["success"], (bool, np.bool_)):
+                raise _fail(name, f"{where}: info['success'] is {info['success']!r}",
+                            "info['success'], where defined, to be a bool")
+            record.obs.append(np.asarray(obs).copy())
+            record.rewards.append(float(reward))
+            record.strategies.append(step_strategy)
+            if terminated or truncated:
+                ended = True
+                break
+        if not ended:
+            raise _fail(name, f"interaction {i} did not end within horizon={horizon} steps "
+                        f"(neither terminated nor truncated)",
+                        "every interaction to end, terminated or truncated, within "
+                        "env.unwrapped.horizon steps")
+        run.append(record)
+    return run
+
+
+def _check_obs(env: gym.Env, obs: Any, where: str, name: str) -> None:
+    if not env.observation_space.contains(obs):
+        raise _fail(name, f"{where}: the observation {obs!r} is not in the observation space "
+                    f"{env.observation_space!r}", "observations inside the observation space")
+
+
+def _check_replay(first: list[_Interaction], replay: list[_Interaction], seed: int,
+                  name: str) -> None:
+    for i, (a, b) in enumerate(zip(first, replay, strict=True)):
+        if len(a.rewards) != len(b.rewards):
+            raise _fail(name, f"reset(seed={seed}) did not replay the sequence: interaction {i} "
+                        f"took {len(a.rewards)} steps, then {len(b.rewards)} with the same "
+                        f"actions", _DETERMINISM_HINT)
+        for t in range(len(a.obs)):
+            when = "reset" if t == 0 else f"step {t}"
+            for what, x, y in (("strategy", a.strategies[t], b.strategies[t]),
+                               ("observation", a.obs[t], b.obs[t])):
+                if not np.allclose(x, y):
+                    raise _fail(name, f"reset(seed={seed}) did not replay the sequence: "
+                                f"interaction {i}, {when}: {what} {x} first, {y} on replay "
+                                f"with the same actions (not deterministic)", _DETERMINISM_HINT)
+        if not np.allclose(a.rewards, b.rewards):
+            raise _fail(name, f"reset(seed={seed}) did not replay the sequence: interaction {i} "
+                        f"rewards differ with the same actions (not deterministic)",
+                        _DETERMINISM_HINT)
+
+
+def _check_no_leak(run: list[_Interaction], name: str) -> None:
+    obs = np.stack([np.asarray(o, dtype=np.float64).ravel() for r in run for o in r.obs])
+    strat = np.stack([s.astype(np.float64) for r in run for s in r.strategies])
+    varied = [k for k in range(strat.shape[1]) if np.ptp(strat[:, k]) > 0]
+    if not varied:
+        warnings.warn(
+            f"{name}: the strategy never changed during the check's {len(run)} interactions, "
+            f"so whether it leaks into the observation could not be checked; try more "
+            f"n_interactions or another seed", UserWarning, stacklevel=3)
+        return
+    for k in varied:
+        for j in range(obs.shape[1]):
+            if np.allclose(obs[:, j], strat[:, k]):
+                raise _fail(name, f"observation dimension {j} equals strategy dimension {k} on "
+                            f"every step of {len(run)} interactions while the strategy changed "
+                            f"(the strategy leaks into the observation)",
+                            "observations that never contain the strategy; report it only in "
+                            "info['strategy'] (the Oracle baseline appends it with "
+                            "OracleObservation)")

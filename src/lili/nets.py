@@ -1,0 +1,106 @@
+"""Networks: MLPs, the tanh-Gaussian actor, the twin critic, LILI's encoder and decoder (Flax)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import flax.linen as nn
+import jax
+import jax.numpy as jnp
+
+__all__ = ["MLP", "Actor", "TwinCritic", "Encoder", "Decoder", "tanh_gaussian"]
+
+LOG_STD_MIN, LOG_STD_MAX = -5.0, 2.0
+
+
+class MLP(nn.Module):
+    """ReLU MLP with a linear output layer."""
+
+    hidden: Sequence[int]
+    out: int
+
+    @nn.compact
+    def __call__(self, x: jax.Array) -> jax.Array:
+        for h in self.hidden:
+            x = nn.relu(nn.Dense(h)(x))
+        return nn.Dense(self.out)(x)
+
+
+class Actor(nn.Module):
+    """Gaussian policy head: returns (mean, log_std) of the pre-tanh action."""
+
+    hidden: Sequence[int]
+    act_dim: int
+
+    @nn.compact
+    def __call__(self, x: jax.Array) -> tuple[jax.Array, jax.Array]:
+        out = MLP(self.hidden, 2 * self.act_dim)(x)
+        mean, log_std = jnp.split(out, 2, axis=-1)
+        # Soft clipping keeps the gradient alive at the bounds (as in SAC implementations).
+        log_std = LOG_STD_MIN + 0.5 * (LOG_STD_MAX - LOG_STD_MIN) * (jnp.tanh(log_std) + 1)
+        return mean, log_std
+
+
+def tanh_gaussian(
+    mean: jax.Array, log_std: jax.Array, key: jax.Array
+) -> tuple[jax.Array, jax.Array]:
+    """Sample a = tanh(u), u ~ N(mean, std); return (a, log pi(a)) with the tanh correction."""
+    std = jnp.exp(log_std)
+    u = mean + std * jax.random.normal(key, mean.shape)
+    logp = -0.5 * (((u - mean) / std) ** 2 + 2 * log_std + jnp.log(2 * jnp.pi))
+    # log(1 - tanh(u)^2) written stably.
+    logp = logp - 2 * (jnp.log(2.0) - u - jax.nn.softplus(-2 * u))
+    return jnp.tanh(u), logp.sum(-1)
+
+
+class TwinCritic(nn.Module):
+    """Two independent Q networks evaluated together; returns shape [2, batch]."""
+
+    hidden: Sequence[int]
+
+    @nn.compact
+    def __call__(self, x: jax.Array, a: jax.Array) -> jax.Array:
+        q = nn.vmap(
+            MLP,
+            variable_axes={"params": 0},
+            split_rngs={"params": True},
+            in_axes=None,
+            out_axes=0,
+            axis_size=2,
+        )(self.hidden, 1)
+        return q(jnp.concatenate([x, a], -1))[..., 0]
+
+
+class Encoder(nn.Module):
+    """E: the transitions of the last N interactions -> z (deterministic).
+
+    Each interaction is embedded by a per-transition MLP and a masked mean over its transitions
+    (permutation-invariant, so early termination and any H work); the N embeddings are
+    concatenated in order and mapped linearly to z.
+
+    Input ``x``: [..., N, H, features]; ``mask``: [..., N, H].
+    """
+
+    hidden: Sequence[int]
+    latent_dim: int
+
+    @nn.compact
+    def __call__(self, x: jax.Array, mask: jax.Array) -> jax.Array:
+        h = x
+        for width in self.hidden:
+            h = nn.relu(nn.Dense(width)(h))
+        m = mask[..., None].astype(h.dtype)
+        pooled = (h * m).sum(-2) / jnp.maximum(m.sum(-2), 1.0)
+        pooled = pooled.reshape(*pooled.shape[:-2], -1)
+        return nn.Dense(self.latent_dim)(pooled)
+
+
+class Decoder(nn.Module):
+    """D: (s, a, z) -> mean of the (normalised) next-state change and reward."""
+
+    hidden: Sequence[int]
+    out: int
+
+    @nn.compact
+    def __call__(self, s: jax.Array, a: jax.Array, z: jax.Array) -> jax.Array:
+        return MLP(self.hidden, self.out)(jnp.concatenate([s, a, z], -1))

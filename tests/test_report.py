@@ -1,0 +1,321 @@
+"""Tests of lili.report on synthetic run folders with known numbers."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from lili import report
+from lili.report import (
+    PAPER,
+    final_performance,
+    find_runs,
+    markdown_table,
+    moving_average,
+    plot_learning_curves,
+    plot_strategy_heatmap,
+    summarize,
+    write_report,
+)
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+PM, DR = "lili/PointMass-v0", "lili/Driving2D-v0"
+N = 100  # interactions per run; the final window is the last 10
+HEADER = (
+    "interaction,return,length,success,strategy_0,strategy_1,strategy_id,"
+    "critic_loss,actor_loss,alpha,rep_loss,wall_time"
+)
+
+# Final returns per (env, algo) for seeds 0, 1, 2 (early interactions return EARLY); binary
+# fractions, so that means over the final window are exact.
+FINAL_RETURN = {
+    PM: {"sac": [-6.0, -5.0, -4.0], "oracle": [-1.0, -0.5, 0.0], "lili": [-1.5, -1.0, -0.5]},
+    DR: {"sac": [-0.5, -0.25, -0.75], "oracle": [0.0, 0.0, 0.0], "lili": [-0.25, 0.0, -0.5]},
+}
+# Driving: number of successes among the last 10 interactions, per seed.
+FINAL_SUCCESSES = {"sac": [4, 5, 6], "oracle": [10, 10, 10], "lili": [10, 9, 8]}
+EARLY = -20.0
+
+
+def _metrics_csv(env: str, algo: str, seed: int, n: int = N) -> str:
+    lines = [HEADER]
+    window = n // 10
+    for i in range(n):
+        final = i >= n - window
+        ret = FINAL_RETURN[env][algo][seed] if final else EARLY
+        if env == PM:
+            # Targets on the circle; LILI keeps them near the top, the others spread around.
+            theta = math.pi / 2 + (0.2 * (i % 3) if algo == "lili" else 0.2 * i)
+            sx, sy = 0.1 * math.cos(theta), -0.05 + 0.1 * math.sin(theta)
+            success, sid, strat = "", -1, f"{sx:.6f},{sy:.6f}"
+        else:
+            k = i - (n - window)
+            success = str(int(final and k < FINAL_SUCCESSES[algo][seed])) if final else "0"
+            sid = i % 2
+            strat = f"{2 * sid - 1:.1f},"  # one strategy column: strategy_1 is empty
+        losses = ",,," if i < 5 else "0.5,0.25,0.1,"
+        lines.append(f"{i},{ret},50,{success},{strat},{sid},{losses},{0.01 * i:.2f}")
+    return "\n".join(lines) + "\n"
+
+
+def _write_run(root: Path, env: str, algo: str, seed: int, n: int = N, csv: str | None = None):
+    folder = root / env.split("/")[-1] / algo / f"seed_{seed}"
+    folder.mkdir(parents=True)
+    config = {"env": env, "algo": algo, "seed": seed, "interactions": n, "lr": 3e-4}
+    (folder / "config.yaml").write_text(yaml.safe_dump(config))
+    if csv is None:
+        csv = _metrics_csv(env, algo, seed, n)
+    (folder / "metrics.csv").write_text(csv)
+    return folder
+
+
+@pytest.fixture()
+def runs_dir(tmp_path: Path) -> Path:
+    root = tmp_path / "runs"
+    for env in (PM, DR):
+        for algo in ("sac", "oracle", "lili"):
+            for seed in range(3):
+                _write_run(root, env, algo, seed)
+    return root
+
+
+def _row(summary, env, algo):
+    (row,) = [r for r in summary if r["env"] == env and r["algo"] == algo]
+    return row
+
+
+def test_find_runs_reads_config_and_metrics(runs_dir: Path) -> None:
+    runs = find_runs([runs_dir])
+    assert len(runs) == 18
+    algos = ("sac", "oracle", "lili")
+    assert {(r.env, r.algo) for r in runs} == {(e, a) for e in (PM, DR) for a in algos}
+    run = next(r for r in runs if r.env == PM and r.algo == "lili" and r.seed == 2)
+    assert run.n_interactions == N and run.budget == N
+    assert run.metrics["interaction"].dtype == np.int64
+    assert np.isnan(run.metrics["success"]).all() and not run.has_success
+    assert np.isnan(run.metrics["critic_loss"][:5]).all() and run.metrics["critic_loss"][5] == 0.5
+    assert run.strategy is not None and run.strategy.shape == (N, 2)
+    # A run folder, a parent and the same folder twice: each run is loaded once.
+    again = find_runs([run.path, runs_dir / "PointMass-v0", run.path / "metrics.csv"])
+    assert len(again) == 9
+
+
+def test_final_performance(runs_dir: Path) -> None:
+    runs = find_runs([runs_dir])
+    for run in runs:
+        assert final_performance(run) == FINAL_RETURN[run.env][run.algo][run.seed]
+        assert final_performance(run, frac=1.0) == pytest.approx(
+            0.9 * EARLY + 0.1 * FINAL_RETURN[run.env][run.algo][run.seed], rel=1e-12
+        )
+        if run.env == DR:
+            assert final_performance(run, "success") == FINAL_SUCCESSES[run.algo][run.seed] / 10
+        else:
+            assert math.isnan(final_performance(run, "success"))
+    run = runs[0]
+    with pytest.raises(ValueError, match="no metric 'nope'"):
+        final_performance(run, "nope")
+    with pytest.raises(ValueError, match="frac"):
+        final_performance(run, frac=0.0)
+
+
+def test_final_performance_uses_at_least_one_interaction(tmp_path: Path) -> None:
+    csv = HEADER + "\n" + "".join(
+        f"{i},{float(i)},50,,0,0,-1,,,,,0\n" for i in range(5)
+    )
+    _write_run(tmp_path, PM, "sac", 0, csv=csv)
+    (run,) = find_runs([tmp_path])
+    assert final_performance(run) == 4.0  # 10% of 5 rounds down to 0 -> 1 interaction
+    assert final_performance(run, frac=0.5) == 3.5  # last 2
+
+
+def test_summarize_numbers(runs_dir: Path) -> None:
+    summary = summarize(find_runs([runs_dir]))
+    assert [(r["env"], r["algo"]) for r in summary] == [
+        (DR, "sac"), (DR, "lili"), (DR, "oracle"), (PM, "sac"), (PM, "lili"), (PM, "oracle"),
+    ]
+    for row in summary:
+        assert row["n"] == 3 and row["seeds"] == [0, 1, 2]
+        assert row["interactions_min"] == row["interactions_max"] == row["budget"] == N
+        finals = FINAL_RETURN[row["env"]][row["algo"]]
+        assert row["returns"] == finals
+        assert row["return_mean"] == pytest.approx(np.mean(finals), rel=1e-12, abs=1e-15)
+        assert row["return_se"] == pytest.approx(np.std(finals, ddof=1) / np.sqrt(3), rel=1e-12)
+
+    sac, lili, oracle = (_row(summary, PM, a) for a in ("sac", "lili", "oracle"))
+    assert sac["return_mean"] == pytest.approx(-5.0)
+    assert sac["return_se"] == pytest.approx(1 / math.sqrt(3))
+    assert oracle["return_mean"] == pytest.approx(-0.5)
+    assert oracle["return_se"] == pytest.approx(0.5 / math.sqrt(3))
+    assert sac["gap_closed"] == 0.0 and oracle["gap_closed"] == 1.0
+    assert lili["gap_closed"] == pytest.approx((-1.0 + 5.0) / (-0.5 + 5.0), rel=1e-12)
+    assert lili["success_mean"] is None and lili["success_se"] is None
+    assert sac["paper_return"] == -5.05 and lili["paper_return"] == -0.72
+    assert oracle["paper_return"] == -0.54
+    assert lili["paper_gap_closed"] == pytest.approx((-0.72 + 5.05) / (-0.54 + 5.05))
+
+    dsac, dlili, doracle = (_row(summary, DR, a) for a in ("sac", "lili", "oracle"))
+    assert dsac["success_mean"] == pytest.approx(0.5)
+    assert dsac["success_se"] == pytest.approx(0.1 / math.sqrt(3))
+    assert dlili["success_mean"] == pytest.approx(0.9)
+    assert dlili["success_se"] == pytest.approx(0.1 / math.sqrt(3))
+    assert doracle["success_mean"] == 1.0 and doracle["success_se"] == 0.0
+    assert dlili["gap_closed"] == pytest.approx((-0.25 + 0.5) / (0.0 + 0.5))
+    assert dlili["paper_return"] is None and dlili["paper_text"] == "near 100%"
+
+
+def test_summarize_single_seed_and_missing_baselines(tmp_path: Path) -> None:
+    _write_run(tmp_path, PM, "lili", 2)
+    _write_run(tmp_path, PM, "sac", 0)
+    summary = summarize(find_runs([tmp_path]))
+    row = _row(summary, PM, "lili")
+    assert row["n"] == 1 and row["return_se"] == 0.0
+    assert row["gap_closed"] is None  # no Oracle run
+    assert "| LILI | 1 | -0.50 ± 0.00 | — | — | -0.72 (gap 0.96) |" in markdown_table(summary)
+
+
+def test_markdown_table(runs_dir: Path) -> None:
+    md = markdown_table(summarize(find_runs([runs_dir])))
+    assert "### Point Mass (lili/PointMass-v0)" in md
+    assert "### Driving (2D) (lili/Driving2D-v0)" in md
+    assert (
+        "| algo | seeds | final return (mean ± s.e.) | success (mean ± s.e.) | gap closed | paper |"
+        in md
+    )
+    assert "| SAC | 3 | -5.00 ± 0.58 | — | 0.00 | -5.05 |" in md
+    assert "| LILI | 3 | -1.00 ± 0.29 | — | 0.89 | -0.72 (gap 0.96) |" in md
+    assert "| Oracle | 3 | -0.50 ± 0.29 | — | 1.00 | -0.54 |" in md
+    assert "| SAC | 3 | -0.50 ± 0.14 | 50.0% ± 5.8% | 0.00 | success about 50% or below |" in md
+    assert "| LILI | 3 | -0.25 ± 0.14 | 90.0% ± 5.8% | 0.50 | success near 100% |" in md
+    assert "| Oracle | 3 | 0.00 ± 0.00 | 100.0% ± 0.0% | 1.00 | success near 100% |" in md
+    assert PAPER[DR]["text"] in md
+
+
+def test_moving_average() -> None:
+    y = np.array([1.0, 2.0, 3.0, 4.0, np.nan, 6.0])
+    np.testing.assert_allclose(moving_average(y, 3), [1.0, 1.5, 2.0, 3.0, 3.5, 5.0])
+    np.testing.assert_allclose(moving_average(y[:4], 1), y[:4])
+    with pytest.raises(ValueError, match="window"):
+        moving_average(y, 0)
+
+
+def _is_png(path: Path) -> bool:
+    data = path.read_bytes()
+    return len(data) > 1000 and data.startswith(PNG_MAGIC)
+
+
+def test_write_report_all_files(runs_dir: Path, tmp_path: Path) -> None:
+    out = tmp_path / "report"
+    result = write_report([runs_dir], out)
+    for name in ("curves.png", "success.png", "heatmap.png"):
+        assert _is_png(out / name), name
+    assert set(result["files"]) == {"curves.png", "success.png", "heatmap.png", "results.md",
+                                    "results.json"}
+    assert (out / "results.md").read_text() == result["markdown"]
+    assert "| LILI | 3 | -1.00 ± 0.29 | — | 0.89 | -0.72 (gap 0.96) |" in result["markdown"]
+    data = json.loads((out / "results.json").read_text())
+    assert data["summary"] == result["summary"]
+    assert len(data["runs"]) == 18 == len(result["runs"])
+    assert _row(data["summary"], PM, "lili")["gap_closed"] == pytest.approx(4 / 4.5)
+    assert data["paper"][PM]["return"]["sac"] == -5.05
+
+
+def test_write_report_without_point_mass_has_no_heatmap(runs_dir: Path, tmp_path: Path) -> None:
+    out = tmp_path / "report"
+    (out).mkdir()
+    (out / "heatmap.png").write_bytes(PNG_MAGIC)  # left over from an earlier report
+    result = write_report([runs_dir / "Driving2D-v0"], out)
+    assert _is_png(out / "curves.png") and _is_png(out / "success.png")
+    assert not (out / "heatmap.png").exists() and "heatmap.png" not in result["files"]
+    assert "Point Mass" not in result["markdown"]
+
+
+def test_write_report_point_mass_only_has_no_success_plot(runs_dir: Path, tmp_path: Path) -> None:
+    out = tmp_path / "report"
+    result = write_report([runs_dir / "PointMass-v0"], out)
+    assert _is_png(out / "curves.png") and _is_png(out / "heatmap.png")
+    assert not (out / "success.png").exists() and "success.png" not in result["files"]
+
+
+def test_plot_functions_direct(runs_dir: Path, tmp_path: Path) -> None:
+    runs = find_runs([runs_dir])
+    assert _is_png(plot_learning_curves(runs, tmp_path / "c.png", window=5))
+    assert _is_png(plot_strategy_heatmap(runs, tmp_path / "h.png", last=20))
+    driving = [r for r in runs if r.env == DR]
+    with pytest.raises(ValueError, match="Point Mass"):
+        plot_strategy_heatmap(driving, tmp_path / "x.png")
+    with pytest.raises(ValueError, match="success"):
+        plot_learning_curves([r for r in runs if r.env == PM], tmp_path / "x.png", "success")
+
+
+def test_unfinished_runs(tmp_path: Path) -> None:
+    # Different lengths, no summary.json, a half-written last line and a run with no rows yet.
+    _write_run(tmp_path, PM, "lili", 0, n=200)
+    partial = _metrics_csv(PM, "lili", 1, n=100) + "100,-3.0,50"
+    _write_run(tmp_path, PM, "lili", 1, csv=partial)
+    _write_run(tmp_path, PM, "lili", 2, csv=HEADER + "\n")
+    runs = find_runs([tmp_path])
+    assert [r.n_interactions for r in runs] == [200, 100, 0]
+    (row,) = summarize(runs)
+    assert row["n"] == 2 and row["interactions_min"] == 100 and row["interactions_max"] == 200
+    result = write_report([tmp_path], tmp_path / "out")
+    assert _is_png(tmp_path / "out" / "curves.png")
+    # Seeds column flags runs that have not used their budget yet.
+    assert "| LILI | 2 (100/200 int.) |" in result["markdown"]
+
+
+def test_bad_paths_raise(tmp_path: Path) -> None:
+    missing = tmp_path / "does-not-exist"
+    with pytest.raises(ValueError, match=str(missing)):
+        find_runs([missing])
+    empty = tmp_path / "empty"
+    (empty / "sub").mkdir(parents=True)
+    with pytest.raises(ValueError, match=f"{empty}.*no run folder"):
+        find_runs([empty])
+    with pytest.raises(ValueError, match=str(missing)):
+        write_report([missing], tmp_path / "out")
+
+
+def test_metrics_without_return_column_raises(tmp_path: Path) -> None:
+    folder = _write_run(tmp_path, PM, "sac", 0, csv="interaction,length\n0,50\n1,50\n")
+    with pytest.raises(ValueError, match=f"{folder / 'metrics.csv'}.*missing column.*return"):
+        find_runs([tmp_path])
+
+
+@pytest.mark.parametrize(
+    ("csv", "message"),
+    [
+        ("", "empty"),
+        ("interaction,return\n0,-1.0\n1,-1.0,7\n2,-1.0\n", "line 3 has 3 fields"),
+        ("interaction,return\n0,abc\n", "'abc' is not a number"),
+        ("interaction,return\n,-1.0\n", "'interaction' must be an integer"),
+    ],
+)
+def test_malformed_metrics_raise(tmp_path: Path, csv: str, message: str) -> None:
+    folder = _write_run(tmp_path, PM, "sac", 0, csv=csv)
+    with pytest.raises(ValueError, match=message) as info:
+        find_runs([folder])
+    assert str(folder / "metrics.csv") in str(info.value)
+
+
+def test_bad_config_and_duplicate_runs_raise(tmp_path: Path) -> None:
+    folder = _write_run(tmp_path / "a", PM, "sac", 0)
+    (folder / "config.yaml").write_text(yaml.safe_dump({"env": PM, "algo": "sac"}))
+    with pytest.raises(ValueError, match=f"{folder / 'config.yaml'}.*seed"):
+        find_runs([folder])
+    _write_run(tmp_path / "b", PM, "sac", 0)
+    _write_run(tmp_path / "c", PM, "sac", 0)
+    with pytest.raises(ValueError, match="same env/algo/seed"):
+        find_runs([tmp_path / "b", tmp_path / "c"])
+
+
+def test_paper_reference_matches_aliases() -> None:
+    assert report.paper_reference("point-mass") is PAPER[PM]
+    assert report.paper_reference("lili/Driving2D-v0") is PAPER[DR]
+    assert report.paper_reference("CartPole-v1") is None
+    assert report.algo_color("lili") != report.algo_color("sac")
+    assert report.algo_color("new-algo") == report.algo_color("new-algo")
