@@ -85,7 +85,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     if remaining < 0:
         raise UsageError(f"--interactions {args.interactions} is below the {start} the run has "
                          "already done")
-    strategy_dim = int(getattr(env.unwrapped, "strategy_space").shape[0])
+    strategy_dim = int(env.unwrapped.strategy_space.shape[0])
     logger = RunLogger(run_dir, resolved, strategy_dim, config.checkpoint_every, start)
     print(f"training {args.algo} on {env_id} (seed {args.seed}) -> {run_dir}"
           + (f" (resumed at interaction {start})" if start else ""))

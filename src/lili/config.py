@@ -42,7 +42,8 @@ class AgentConfig:
             interaction run as one fused ``lax.scan`` block.
         warmup_interactions: interactions with uniform random actions before learning starts.
         target_entropy: None = -|A| (SAC's default).
-        init_alpha: initial temperature.
+        init_alpha: initial temperature (0.1: the rewards here are O(0.05..1) per step, so
+            SAC's usual 1.0 lets the entropy bonus swamp them for hundreds of interactions).
         phase_feature: give actor, critic and encoder the step's phase t/H. Without it the last
             step of an interaction (whose target jumps to the next interaction) is aliased with
             the same state earlier in the interaction (calibration note, failure 2).
@@ -80,7 +81,7 @@ class AgentConfig:
     updates_per_step: float = 1.0
     warmup_interactions: int = 20
     target_entropy: float | None = None
-    init_alpha: float = 1.0
+    init_alpha: float = 0.1
     phase_feature: bool = True
     normalize: bool = True
     target_encoder: bool = True
@@ -93,7 +94,8 @@ class AgentConfig:
 
     def __post_init__(self) -> None:
         def bad(name: str, allowed: str) -> ValueError:
-            return ValueError(f"config {name}={getattr(self, name)!r} is invalid; allowed: {allowed}")
+            value = getattr(self, name)
+            return ValueError(f"config {name}={value!r} is invalid; allowed: {allowed}")
 
         for name in ("gamma",):
             v = getattr(self, name)
@@ -128,9 +130,8 @@ class AgentConfig:
         for name in ("phase_feature", "normalize", "target_encoder"):
             if not isinstance(getattr(self, name), bool):
                 raise bad(name, "true or false")
-        if self.target_entropy is not None and (
-            isinstance(self.target_entropy, bool) or not isinstance(self.target_entropy, (int, float))
-        ):
+        te = self.target_entropy
+        if te is not None and (isinstance(te, bool) or not isinstance(te, (int, float))):
             raise bad("target_entropy", "a number or null (= -|A|)")
         if self.boundary is not None and self.boundary not in BOUNDARY_MODES:
             raise bad("boundary", ", ".join(BOUNDARY_MODES) + " or null (the agent's default)")

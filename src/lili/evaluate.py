@@ -8,7 +8,7 @@ import gymnasium as gym
 import jax
 import numpy as np
 
-from lili.agents.sac import SAC
+from lili.agents.sac import SAC, LatentState
 from lili.buffer import InteractionBuffer
 from lili.train import rollout
 
@@ -47,7 +47,7 @@ def evaluate(
         k = jax.random.fold_in(key, i)
 
         def act(o, t, k=k, z=state.z):
-            a = agent.policy_action(o, type(state)(z, t), jax.random.fold_in(k, t), deterministic)
+            a = agent.policy_action(o, LatentState(z, t), jax.random.fold_in(k, t), deterministic)
             if frames is not None:
                 frames.append(env.render())
             return a

@@ -19,8 +19,10 @@ import gymnasium as gym
 import jax
 import numpy as np
 
+from lili.agents.sac import LatentState
+
 if TYPE_CHECKING:
-    from lili.agents.sac import SAC, LatentState
+    from lili.agents.sac import SAC
 
 __all__ = ["train", "rollout", "Interaction"]
 
@@ -107,8 +109,13 @@ def train(
 
     bar = None
     if progress:
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, \
-            TimeRemainingColumn
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeRemainingColumn,
+        )
 
         bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(),
                        MofNCompleteColumn(), TextColumn("{task.fields[stats]}"),
@@ -124,8 +131,8 @@ def train(
                 def act(o, t, rng=rng):
                     return rng.uniform(-1.0, 1.0, agent.act_dim)
             else:
-                def act(o, t, key=act_key):
-                    s = type(state)(state.z, t)
+                def act(o, t, key=act_key, z=state.z):
+                    s = LatentState(z, t)
                     return agent.policy_action(o, s, jax.random.fold_in(key, t), False)
 
             done = rollout(env, obs, info, act, agent.scale_action, agent.horizon)

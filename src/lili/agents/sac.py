@@ -205,34 +205,44 @@ class SAC:
         return jnp.zeros((0,))
 
     # -- one gradient update ---------------------------------------------------------------
+    def _with_z(self, x: jax.Array, z: jax.Array) -> jax.Array:
+        """Append the per-interaction latent [B, L] to per-transition inputs [B, M, .]."""
+        return jnp.concatenate([x, jnp.broadcast_to(z[:, None, :], (*x.shape[:-1], z.shape[-1]))],
+                               -1)
+
+    def critic_target(self, state: dict, batch: dict, key: jax.Array) -> jax.Array:
+        """The soft Bellman target y for every transition of ``batch`` ([B, M]).
+
+        Within an interaction: y = r + gamma V(s', z^k). At its last step the next state is the
+        first observation of interaction k+1 (phase 0), with the latent the boundary mode
+        prescribes: E(tau^k) for ``influence``, z^k for ``same_z``, none for ``bootstrap``
+        (agents without latent); ``cut`` ends the return there (y = r). V(s, z) =
+        min_j Qbar_j(s, a', z) - alpha log pi(a' | s, z), a' ~ pi(. | s, z). Target-side latents
+        come from the target encoder.
+        """
+        norm = state["norm"]
+        _, zbar, zbar_next = self._latents(state["model"], state["target"], norm, batch)
+        zbar, zbar_next = sg(zbar), sg(zbar_next)
+        x_within = self._with_z(self._x(norm, batch["next_obs"], batch["t"] + 1), zbar)
+        first = jnp.broadcast_to(batch["next_first_obs"][:, None], batch["obs"].shape)
+        z_boundary = zbar_next if self.boundary == "influence" else zbar
+        x_boundary = self._with_z(self._x(norm, first, 0.0), z_boundary)
+        last = batch["last"]
+        x_next = jnp.where(last[..., None], x_boundary, x_within)
+        mean, log_std = self.actor.apply(state["actor"], x_next)
+        a_next, logp_next = tanh_gaussian(mean, log_std, key)
+        q_next = self.critic.apply(state["target"]["critic"], x_next, a_next).min(0)
+        v_next = q_next - jnp.exp(state["log_alpha"]) * logp_next
+        cont = 1.0 - (last & (self.boundary == "cut")).astype(jnp.float32)
+        return sg(batch["rew"] + self.config.gamma * cont * v_next)
+
     def _update(self, state: dict, batch: dict, key: jax.Array) -> tuple[dict, dict]:
         cfg = self.config
         norm = state["norm"]
         k_next, k_pi = jax.random.split(key)
         alpha = jnp.exp(state["log_alpha"])
-        B, M = batch["rew"].shape
-
-        def with_z(x: jax.Array, z: jax.Array) -> jax.Array:
-            return jnp.concatenate([x, jnp.broadcast_to(z[:, None, :], (B, M, z.shape[-1]))], -1)
-
-        _, zbar, zbar_next = self._latents(state["model"], state["target"], norm, batch)
-        zbar, zbar_next = sg(zbar), sg(zbar_next)
-
-        # Critic target. Within an interaction: y = r + gamma V(s', z^k). At its last step the
-        # next state is the first observation of interaction k+1 (phase 0), with the latent the
-        # boundary mode prescribes; "cut" ends the return there (y = r).
-        x_within = with_z(self._x(norm, batch["next_obs"], batch["t"] + 1), zbar)
-        first = jnp.broadcast_to(batch["next_first_obs"][:, None], batch["obs"].shape)
-        z_boundary = zbar_next if self.boundary == "influence" else zbar
-        x_boundary = with_z(self._x(norm, first, 0.0), z_boundary)
-        last = batch["last"]
-        x_next = jnp.where(last[..., None], x_boundary, x_within)
-        mean, log_std = self.actor.apply(state["actor"], x_next)
-        a_next, logp_next = tanh_gaussian(mean, log_std, k_next)
-        q_next = self.critic.apply(state["target"]["critic"], x_next, a_next).min(0)
-        v_next = q_next - alpha * logp_next
-        cont = 1.0 - (last & (self.boundary == "cut")).astype(jnp.float32)
-        y = sg(batch["rew"] + cfg.gamma * cont * v_next)
+        with_z = self._with_z
+        y = self.critic_target(state, batch, k_next)
 
         def model_loss(model: Params):
             z, _, _ = self._latents(model, state["target"], norm, batch)
@@ -321,7 +331,8 @@ class SAC:
 
     def scale_action(self, a: np.ndarray) -> np.ndarray:
         """Map an action in [-1, 1] (the networks' range) to the env's action bounds."""
-        return self.act_low + (np.asarray(a, np.float32) + 1.0) * 0.5 * (self.act_high - self.act_low)
+        span = self.act_high - self.act_low
+        return self.act_low + (np.asarray(a, np.float32) + 1.0) * 0.5 * span
 
     def predict(
         self,

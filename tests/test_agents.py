@@ -1,0 +1,200 @@
+"""Agents: the critic target at the interaction boundary, acting, save/load, bad input."""
+
+import gymnasium as gym
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import lili.envs  # noqa: F401  (registers the envs)
+from lili.agents import LILI, SAC, CheckpointError, Oracle, load_agent, make_agent
+from lili.config import AgentConfig, load_config
+from lili.nets import tanh_gaussian
+
+SMALL = AgentConfig(hidden=(32, 32), enc_hidden=(16, 16), latent_dim=3)
+GAMMA = SMALL.gamma
+
+
+def _batch(agent, rng):
+    """A hand-made batch: 2 interactions x 3 transitions; transition 2 is each one's last."""
+    b, m, h, od, ad = 2, 3, agent.horizon, agent.obs_dim, agent.act_dim
+    f = lambda *s: jnp.asarray(rng.normal(size=s), jnp.float32)  # noqa: E731
+    window = {"obs": f(b, 2, h, od), "act": f(b, 2, h, ad), "rew": f(b, 2, h),
+              "next_obs": f(b, 2, h, od), "valid": jnp.ones((b, 2, h), bool)}
+    return {"obs": f(b, m, od), "act": f(b, m, ad), "rew": f(b, m), "next_obs": f(b, m, od),
+            "t": jnp.array([[3, 10, h - 1], [0, 7, h - 1]]),
+            "last": jnp.array([[False, False, True], [False, False, True]]),
+            "next_first_obs": f(b, od), "index": jnp.array([5, 9]), "window": window}
+
+
+def _manual_target(agent, state, batch, key, boundary_latent):
+    """y computed from first principles for each transition (see DESIGN 'LILI semantics')."""
+    norm = state["norm"]
+    h = agent.horizon
+    enc_t = state["target"]["encoder"]
+    prev = {k: v[:, 0:1] for k, v in batch["window"].items()}
+    cur = {k: v[:, 1:2] for k, v in batch["window"].items()}
+    z_k = agent.encoder.apply(enc_t, agent._features(norm, prev), prev["valid"])
+    z_k1 = agent.encoder.apply(enc_t, agent._features(norm, cur), cur["valid"])
+    rows = []
+    for i in range(2):
+        row = []
+        for j in range(3):
+            if batch["last"][i, j]:
+                s, phase = batch["next_first_obs"][i], 0.0
+                z = {"influence": z_k1, "same_z": z_k}.get(boundary_latent, z_k)[i]
+            else:
+                s, phase = batch["next_obs"][i, j], (batch["t"][i, j] + 1) / h
+                z = z_k[i]
+            s = (s - norm["obs_mean"]) / norm["obs_std"]
+            row.append(jnp.concatenate([s, jnp.array([phase]), z]))
+        rows.append(jnp.stack(row))
+    x = jnp.stack(rows)
+    mean, log_std = agent.actor.apply(state["actor"], x)
+    a, logp = tanh_gaussian(mean, log_std, key)
+    v = agent.critic.apply(state["target"]["critic"], x, a).min(0) - jnp.exp(
+        state["log_alpha"]) * logp
+    y = batch["rew"] + GAMMA * v
+    if boundary_latent == "cut":
+        y = jnp.where(batch["last"], batch["rew"], y)
+    return y
+
+
+@pytest.mark.parametrize("influence", [True, False])
+def test_critic_target_at_the_boundary(influence):
+    env = gym.make("lili/PointMass-v0")
+    agent = LILI(env, SMALL, seed=1, influence=influence)
+    assert agent.boundary == ("influence" if influence else "cut")
+    state = dict(agent.state)
+    # Make the target encoder differ from the online one: the target must use the target copy.
+    state["target"] = dict(state["target"], encoder=jax.tree_util.tree_map(
+        lambda p: p * 1.5 + 0.1, state["target"]["encoder"]))
+    batch = _batch(agent, np.random.default_rng(0))
+    key = jax.random.PRNGKey(7)
+    y = np.asarray(agent.critic_target(state, batch, key))
+    want = _manual_target(agent, state, batch, key, "influence" if influence else "cut")
+    np.testing.assert_allclose(y, np.asarray(want), rtol=1e-5, atol=1e-5)
+    if not influence:
+        # LILI (no influence) is greedy: the return stops at the end of the interaction.
+        np.testing.assert_array_equal(y[:, 2], np.asarray(batch["rew"][:, 2]))
+    else:
+        # The influence path: at the boundary the latent is E(tau^k), not the unchanged z^k.
+        other = _manual_target(agent, state, batch, key, "same_z")
+        assert not np.allclose(y[:, 2], np.asarray(other[:, 2]))
+        np.testing.assert_allclose(y[:, :2], np.asarray(other[:, :2]), rtol=1e-5, atol=1e-5)
+
+
+def test_same_z_reading_is_available_as_an_option():
+    env = gym.make("lili/PointMass-v0")
+    agent = LILI(env, SMALL.replace(boundary="same_z"), seed=1, influence=False)
+    batch = _batch(agent, np.random.default_rng(0))
+    key = jax.random.PRNGKey(2)
+    y = agent.critic_target(agent.state, batch, key)
+    want = _manual_target(agent, agent.state, batch, key, "same_z")
+    np.testing.assert_allclose(np.asarray(y), np.asarray(want), rtol=1e-5, atol=1e-5)
+
+
+def test_sac_bootstraps_from_the_next_interaction():
+    env = gym.make("lili/PointMass-v0")
+    agent = SAC(env, SMALL, seed=0)
+    batch = _batch(agent, np.random.default_rng(1))
+    batch.pop("window")
+    key = jax.random.PRNGKey(3)
+    y = np.asarray(agent.critic_target(agent.state, batch, key))
+    st = agent.state
+    x = jnp.concatenate([batch["next_first_obs"], jnp.zeros((2, 1))], -1)  # phase 0
+    x = jnp.broadcast_to(x[:, None], (2, 3, 3))
+    x_in = jnp.concatenate([batch["next_obs"], ((batch["t"] + 1) / agent.horizon)[..., None]], -1)
+    x = jnp.where(batch["last"][..., None], x, x_in)
+    mean, log_std = agent.actor.apply(st["actor"], x)
+    a, logp = tanh_gaussian(mean, log_std, key)
+    v = agent.critic.apply(st["target"]["critic"], x, a).min(0) - jnp.exp(st["log_alpha"]) * logp
+    np.testing.assert_allclose(y, np.asarray(batch["rew"] + GAMMA * v), rtol=1e-5, atol=1e-5)
+
+
+def test_oracle_sees_the_strategy_and_lili_does_not():
+    env = gym.make("lili/PointMass-v0")
+    oracle = Oracle(env, SMALL)
+    assert oracle.obs_dim == 4
+    assert LILI(gym.make("lili/PointMass-v0"), SMALL).obs_dim == 2
+
+
+def test_predict_scales_actions_and_carries_the_step():
+    env = gym.make("lili/Driving2D-v0")
+    agent = LILI(env, SMALL)
+    obs, _ = env.reset(seed=0)
+    a, st = agent.predict(obs)
+    assert a.shape == (1,) and -1 <= a[0] <= 1 and st.t == 1
+    assert st.z.shape == (3,) and not st.z.any()
+    with pytest.raises(ValueError, match="shape"):
+        agent.predict(np.zeros(3))
+
+
+def test_save_load_round_trip(tmp_path):
+    env = gym.make("lili/PointMass-v0")
+    agent = LILI(env, SMALL.replace(warmup_interactions=3), seed=4)
+    agent.learn(5)
+    path = agent.save(tmp_path / "agent.msgpack")
+    loaded = LILI.load(path, gym.make("lili/PointMass-v0"))
+    assert loaded.algo == "lili" and loaded.config == agent.config
+    assert loaded.num_interactions == 5
+    for a, b in zip(jax.tree_util.tree_leaves(agent.state), jax.tree_util.tree_leaves(loaded.state),
+                    strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    obs = np.array([0.01, -0.02], np.float32)
+    st = agent.current_latent_state()
+    np.testing.assert_array_equal(agent.predict(obs, st)[0], loaded.predict(obs, st)[0])
+    assert isinstance(load_agent(path, gym.make("lili/PointMass-v0")), LILI)
+
+
+def test_load_rejects_corrupt_and_mismatched_files(tmp_path):
+    env = gym.make("lili/PointMass-v0")
+    path = SAC(env, SMALL).save(tmp_path / "sac.msgpack")
+    with pytest.raises(CheckpointError, match="holds a 'sac' agent"):
+        LILI.load(path, env)
+    with pytest.raises(CheckpointError, match="obs_dim=2"):
+        SAC.load(path, gym.make("lili/Driving2D-v0"))
+    bad = tmp_path / "bad.msgpack"
+    bad.write_bytes(b"not a checkpoint")
+    with pytest.raises(CheckpointError, match="corrupt"):
+        SAC.load(bad, env)
+    truncated = tmp_path / "trunc.msgpack"
+    truncated.write_bytes(path.read_bytes()[:-100])
+    with pytest.raises(CheckpointError, match="corrupt"):
+        SAC.load(truncated, env)
+    with pytest.raises(CheckpointError, match="does not exist"):
+        SAC.load(tmp_path / "missing.msgpack", env)
+
+
+@pytest.mark.parametrize("bad, match", [
+    ({"gamma": 1.5}, "gamma=1.5"),
+    ({"hidden": [0]}, "hidden"),
+    ({"boundary": "sideways"}, "boundary='sideways'"),
+    ({"latent_dim": 0}, "latent_dim=0"),
+    ({"lr_actor": "fast"}, "lr_actor='fast'"),
+    ({"warmup": 3}, "unknown config key"),
+])
+def test_bad_config_values_are_named(bad, match):
+    with pytest.raises(ValueError, match=match):
+        AgentConfig.from_dict(bad)
+
+
+def test_load_config_errors(tmp_path):
+    p = tmp_path / "c.yaml"
+    p.write_text("gamma: [1, 2\n")
+    with pytest.raises(ValueError, match="not valid YAML"):
+        load_config(p)
+    p.write_text("- 1\n- 2\n")
+    with pytest.raises(ValueError, match="mapping"):
+        load_config(p)
+    p.write_text("gamma: 0.9\nhidden: [64, 64]\n")
+    assert load_config(p).hidden == (64, 64)
+
+
+def test_bad_env_and_algo():
+    with pytest.raises(ValueError, match="unknown algo 'ppo'"):
+        make_agent("ppo", gym.make("lili/PointMass-v0"))
+    with pytest.raises(ValueError, match="action space"):
+        SAC(gym.make("CartPole-v1"))
+    with pytest.raises(ValueError, match="seed=-1"):
+        SAC(gym.make("lili/PointMass-v0"), seed=-1)
