@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import time
@@ -58,7 +59,12 @@ def run_grid(env: str, algos: list[str], seeds: int, interactions: int, out: Pat
             log.mkdir(parents=True, exist_ok=True)
             f = open(log / f"{env_dir}_{algo}_{seed}.log", "w")
             print(f"start {algo} seed {seed}", flush=True)
-            running.append((algo, seed, subprocess.Popen(cmd, stdout=f, stderr=f), time.time()))
+            # One XLA thread per run: with --jobs runs side by side, intra-op threading of
+            # these small matrices only adds contention.
+            env = dict(os.environ, XLA_FLAGS="--xla_cpu_multi_thread_eigen=false "
+                       "intra_op_parallelism_threads=1")
+            proc = subprocess.Popen(cmd, stdout=f, stderr=f, env=env)
+            running.append((algo, seed, proc, time.time()))
         for item in list(running):
             algo, seed, proc, t0 = item
             if proc.poll() is not None:

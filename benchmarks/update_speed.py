@@ -55,9 +55,9 @@ def sb3(n_updates: int):
     except ImportError:
         return None
     env = gym.make("lili/PointMass-v0")
-    model = SB3SAC("MlpPolicy", env, batch_size=256, learning_starts=0, buffer_size=100_000,
+    model = SB3SAC("MlpPolicy", env, batch_size=256, learning_starts=2000, buffer_size=100_000,
                    policy_kwargs={"net_arch": [256, 256]}, seed=0, device="cpu", verbose=0)
-    model.learn(total_timesteps=2000)  # fills the replay buffer
+    model.learn(total_timesteps=2000)  # fills the replay buffer (no updates before 2000 steps)
 
     def run():
         model.train(gradient_steps=n_updates, batch_size=256)

@@ -136,7 +136,7 @@ def test_final_performance_uses_at_least_one_interaction(tmp_path: Path) -> None
 def test_summarize_numbers(runs_dir: Path) -> None:
     summary = summarize(find_runs([runs_dir]))
     assert [(r["env"], r["algo"]) for r in summary] == [
-        (DR, "sac"), (DR, "lili"), (DR, "oracle"), (PM, "sac"), (PM, "lili"), (PM, "oracle"),
+        (PM, "sac"), (PM, "lili"), (PM, "oracle"), (DR, "sac"), (DR, "lili"), (DR, "oracle"),
     ]
     for row in summary:
         assert row["n"] == 3 and row["seeds"] == [0, 1, 2]
@@ -216,6 +216,8 @@ def test_write_report_all_files(runs_dir: Path, tmp_path: Path) -> None:
     assert set(result["files"]) == {"curves.png", "success.png", "heatmap.png", "results.md",
                                     "results.json"}
     assert (out / "results.md").read_text() == result["markdown"]
+    # The CLI prints markdown_table(write_report(...)): the returned dict is accepted too.
+    assert markdown_table(result) == result["markdown"] == markdown_table(result["summary"])
     assert "| LILI | 3 | -1.00 ± 0.29 | — | 0.89 | -0.72 (gap 0.96) |" in result["markdown"]
     data = json.loads((out / "results.json").read_text())
     assert data["summary"] == result["summary"]

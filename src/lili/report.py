@@ -21,6 +21,7 @@ import json
 import math
 import os
 import re
+import textwrap
 import zlib
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -100,6 +101,7 @@ ALGO_COLORS = {
 }
 _EXTRA_COLORS = ("#e377c2", "#bcbd22", "#17becf", "#7f7f7f", "#000000", "#aec7e8")
 _ENV_TITLES = {"pointmass": "Point Mass", "driving2d": "Driving (2D)"}
+_ENV_ORDER = ("pointmass", "driving2d")
 DPI = 120
 
 
@@ -382,6 +384,11 @@ def algo_color(algo: str) -> str:
     return _EXTRA_COLORS[zlib.crc32(algo.encode()) % len(_EXTRA_COLORS)]
 
 
+def _env_sort_key(env: str) -> tuple[int, str]:
+    key = _env_key(env)
+    return (_ENV_ORDER.index(key) if key in _ENV_ORDER else len(_ENV_ORDER), env)
+
+
 def _env_title(env: str) -> str:
     pretty = _ENV_TITLES.get(_env_key(env))
     return f"{pretty} ({env})" if pretty else env
@@ -397,7 +404,7 @@ def _group(runs: Iterable[Run]) -> dict[str, dict[str, list[Run]]]:
     return {
         env: {algo: sorted(by_algo[algo], key=lambda r: r.seed)
               for algo in sorted(by_algo, key=_algo_sort_key)}
-        for env, by_algo in sorted(groups.items())
+        for env, by_algo in sorted(groups.items(), key=lambda kv: _env_sort_key(kv[0]))
     }
 
 
@@ -472,12 +479,18 @@ def _fmt(value: float | None, se: float | None, spec: str = ".2f", pct: bool = F
     return f"{value:{spec}} ± {(se or 0.0):{spec}}"
 
 
-def markdown_table(summary: Sequence[dict[str, Any]]) -> str:
-    """Markdown with one table per env (see :func:`summarize` for the input).
+def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
+    """Markdown with one table per env.
 
-    Columns: algo | seeds | final return (mean ± s.e.) | success (mean ± s.e. or —) |
-    gap closed | paper. Below each table: the paper's statement where it gives no numbers.
+    ``summary`` is the list from :func:`summarize` or the dict that :func:`write_report`
+    returns (its ``"summary"`` is used). Columns: algo | seeds | final return (mean ± s.e.) |
+    success (mean ± s.e. or —) | gap closed | paper. Below each table: the paper's source, or
+    its statement where it gives no numbers.
     """
+    if isinstance(summary, dict):
+        if "summary" not in summary:
+            raise ValueError("markdown_table needs summarize(...) or write_report(...)'s result")
+        summary = summary["summary"]
     by_env: dict[str, list[dict[str, Any]]] = {}
     for row in summary:
         by_env.setdefault(row["env"], []).append(row)
@@ -620,12 +633,12 @@ def plot_learning_curves(
                 ax.axhline(value, color=algo_color(algo), ls="--", lw=1.1, alpha=0.85)
                 handles.append(Line2D([], [], color=algo_color(algo), ls="--", lw=1.1,
                                       label=f"paper {algo_label(algo)} ({value:g})"))
+        title = _env_title(env)
         if metric == "success" and "text" in ref:
-            ax.text(0.02, 0.03, f"paper: {ref['text']}", transform=ax.transAxes, fontsize=7.5,
-                    style="italic", color="0.3", va="bottom", ha="left")
+            title += "\n" + textwrap.fill(f"paper: {ref['text']}", width=50)
         if metric == "success":
             ax.set_ylim(-0.03, 1.03)
-        ax.set_title(_env_title(env))
+        ax.set_title(title, fontsize=11)
         ax.set_xlabel("interaction")
         ax.set_ylabel(f"{ylabel} (moving avg. {window})")
         ax.grid(True, alpha=0.3)
@@ -650,20 +663,21 @@ def plot_strategy_heatmap(runs: Iterable[Run], out_png: str | Path, last: int = 
     """
     if last < 1:
         raise ValueError(f"last={last!r} is invalid; allowed: an integer >= 1")
-    panels: list[tuple[str, str, np.ndarray, int]] = []
+    panels: list[tuple[str, str, np.ndarray, int, int]] = []
     for env, by_algo in _group(runs).items():
         if "pointmass" not in _env_key(env):
             continue
         for algo, group in by_algo.items():
-            points = []
+            points, used = [], 0
             for run in group:
                 strat = run.strategy
                 if strat is None or strat.shape[1] < 2:
                     continue
                 xy = strat[-last:, :2]
+                used = max(used, len(xy))
                 points.append(xy[~np.isnan(xy).any(axis=1)])
             if points:
-                panels.append((env, algo, np.concatenate(points), len(points)))
+                panels.append((env, algo, np.concatenate(points), len(points), used))
     if not panels:
         raise ValueError("no Point Mass run with strategy_0/strategy_1 columns to plot")
     plt = _pyplot()
@@ -673,42 +687,45 @@ def plot_strategy_heatmap(runs: Iterable[Run], out_png: str | Path, last: int = 
 
     edges = np.linspace(-PM_BOUND, PM_BOUND, 41)
     hists = []
-    for _, _, xy, _ in panels:
+    for _, _, xy, _, _ in panels:
         h, _, _ = np.histogram2d(xy[:, 0], xy[:, 1], bins=[edges, edges])
         hists.append(h / max(len(xy), 1))
     vmax = max(float(h.max()) for h in hists) or 1.0
     norm = PowerNorm(gamma=0.5, vmin=0.0, vmax=vmax)
-    nrows, ncols = _grid(len(panels), max_cols=4)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(3.9 * ncols + 0.9, 3.9 * nrows),
-                             squeeze=False)
+    cmap = plt.get_cmap("magma_r").with_extremes(bad="white")
+    ncols = 2 if len(panels) == 4 else min(len(panels), 3)
+    nrows = math.ceil(len(panels) / ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(3.7 * ncols + 1.0, 3.9 * nrows + 0.5),
+                             squeeze=False, layout="constrained")
     multi_env = len({env for env, *_ in panels}) > 1
     mesh = None
-    for ax, (env, algo, _xy, n_seeds), h in zip(axes.flat, panels, hists, strict=False):
-        mesh = ax.pcolormesh(edges, edges, h.T, cmap="magma", norm=norm)
-        ax.add_patch(Circle(PM_CENTER, PM_RADIUS, fill=False, ec="white", lw=1.0, ls="--",
-                            alpha=0.8))
-        ax.plot([0.0], [0.0], marker="*", ms=13, color="#00e5ff", mec="black", mew=0.6, ls="")
+    for ax, (env, algo, _xy, n_seeds, used), h in zip(axes.flat, panels, hists, strict=False):
+        mesh = ax.pcolormesh(edges, edges, np.ma.masked_equal(h.T, 0.0), cmap=cmap, norm=norm)
+        ax.add_patch(Circle(PM_CENTER, PM_RADIUS, fill=False, ec="0.35", lw=1.0, ls="--"))
+        ax.plot([0.0], [0.0], marker="*", ms=13, color="#1f9bde", mec="black", mew=0.6, ls="")
         ax.set_xlim(-PM_BOUND, PM_BOUND)
         ax.set_ylim(-PM_BOUND, PM_BOUND)
         ax.set_aspect("equal")
-        title = f"{algo_label(algo)}\n{n_seeds} seed{'s' * (n_seeds > 1)}, last {last} interactions"
+        title = f"{algo_label(algo)}\n{n_seeds} seed{'s' * (n_seeds > 1)}, last {used} interactions"
         if multi_env:
             title = f"{env}: {title}"
         ax.set_title(title, fontsize=10, color=algo_color(algo))
         ax.set_xlabel("target x")
         ax.set_ylabel("target y")
         ax.tick_params(labelsize=8)
+        ax.grid(True, alpha=0.2)
     for ax in list(axes.flat)[len(panels):]:
         ax.set_visible(False)
     legend = [
-        Line2D([], [], marker="*", ms=11, color="#00e5ff", mec="black", ls="", label="ego start"),
-        Line2D([], [], color="0.4", ls="--", label="target circle"),
+        Line2D([], [], marker="*", ms=11, color="#1f9bde", mec="black", ls="", label="ego start"),
+        Line2D([], [], color="0.35", ls="--", label="circle the target moves on"),
     ]
-    fig.legend(handles=legend, loc="lower center", ncol=2, fontsize=9, frameon=False)
-    fig.suptitle("Point Mass: where the target is (partner's strategy)", fontsize=12)
-    fig.tight_layout(rect=(0, 0.06, 1, 1))
-    cbar = fig.colorbar(mesh, ax=axes.ravel().tolist(), shrink=0.85, pad=0.02)
-    cbar.set_label("fraction of interactions", fontsize=9)
+    fig.legend(handles=legend, loc="outside lower center", ncol=2, fontsize=9, frameon=False)
+    fig.suptitle("Point Mass: target position (partner's strategy) at the end of training",
+                 fontsize=12)
+    cbar = fig.colorbar(mesh, ax=axes.ravel().tolist(), shrink=0.8, pad=0.02)
+    cbar.set_ticks(np.unique(np.round(np.linspace(0.0, 1.0, 6) ** 2 * vmax, 3)))
+    cbar.set_label("fraction of interactions (sqrt scale)", fontsize=9)
     out_png = Path(out_png)
     fig.savefig(out_png, dpi=DPI)
     plt.close(fig)
