@@ -19,8 +19,10 @@ def _batch(agent, rng):
     """A hand-made batch: 2 interactions x 3 transitions; transition 2 is each one's last."""
     b, m, h, od, ad = 2, 3, agent.horizon, agent.obs_dim, agent.act_dim
     f = lambda *s: jnp.asarray(rng.normal(size=s), jnp.float32)  # noqa: E731
+    t = jnp.broadcast_to(jnp.arange(h), (b, 2, h))
     window = {"obs": f(b, 2, h, od), "act": f(b, 2, h, ad), "rew": f(b, 2, h),
-              "next_obs": f(b, 2, h, od), "valid": jnp.ones((b, 2, h), bool)}
+              "next_obs": f(b, 2, h, od), "valid": jnp.ones((b, 2, h), bool), "t": t,
+              "last": t == h - 1}
     return {"obs": f(b, m, od), "act": f(b, m, ad), "rew": f(b, m), "next_obs": f(b, m, od),
             "t": jnp.array([[3, 10, h - 1], [0, 7, h - 1]]),
             "last": jnp.array([[False, False, True], [False, False, True]]),

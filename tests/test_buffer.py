@@ -97,3 +97,21 @@ def test_state_dict_round_trip_and_bad_length():
         buf.add(_traj(0, 6), np.zeros(2, np.float32))
     with pytest.raises(ValueError, match="shape"):
         InteractionBuffer(8, 6, 2, 1).load_state_dict(buf.state_dict())
+
+
+def test_subsampled_window_always_holds_the_last_step():
+    buf = _filled(6, horizon=10, lengths=[10, 4, 1])
+    arrays = {k: jnp.asarray(v) for k, v in buf.arrays.items()}
+    batch = sample(arrays, jnp.int32(buf.count), jax.random.PRNGKey(5), 64, 2, 1, 5)
+    win = jax.tree_util.tree_map(np.asarray, batch["window"])
+    k = np.asarray(batch["index"])
+    lengths = np.array([10, 4, 1])[np.stack([k - 1, k], -1) % 3]
+    assert win["obs"].shape == (64, 2, 5, 2)
+    # The last of the S steps is the interaction's last step; the others come before it.
+    np.testing.assert_array_equal(win["t"][..., -1], lengths - 1)
+    assert win["last"][..., -1].all()
+    assert (win["t"][..., :-1] <= np.maximum(lengths - 2, 0)[..., None]).all()
+    # Each gathered transition really is step t of its interaction.
+    np.testing.assert_array_equal(win["rew"] % 1000, win["t"])
+    owner = np.broadcast_to(np.stack([k - 1, k], -1)[..., None], win["t"].shape)
+    np.testing.assert_array_equal(win["obs"][..., 0], owner)

@@ -65,12 +65,16 @@ class InteractionBuffer:
         return self.count - 1
 
     def window(self, end: int, n: int) -> dict[str, np.ndarray]:
-        """Interactions end-n+1 .. end as [n, H, ...] arrays (missing ones fully masked)."""
+        """Interactions end-n+1 .. end as [n, H, ...] arrays (missing ones fully masked), with
+        each step's index ``t`` and ``last`` flag."""
         idx = np.arange(end - n + 1, end + 1)
         ok = (idx >= 0) & (idx > self.count - 1 - self.capacity) & (idx < self.count)
         slots = np.mod(idx, self.capacity)
         out = {k: self.arrays[k][slots] for k in FIELDS}
         out["valid"] = out["valid"] & ok[:, None]
+        t = np.broadcast_to(np.arange(self.horizon), out["valid"].shape)
+        out["t"] = t
+        out["last"] = (t == self.arrays["length"][slots][:, None] - 1) & out["valid"]
         return out
 
     def state_dict(self) -> dict[str, Any]:
@@ -90,13 +94,33 @@ class InteractionBuffer:
         self.count = int(d["count"])
 
 
-def _gather_window(arrays: dict[str, jax.Array], count: jax.Array, idx: jax.Array):
-    """Interactions at logical indices ``idx`` (any shape) with out-of-range ones masked."""
-    capacity = arrays["rew"].shape[0]
+def _gather_window(arrays: dict[str, jax.Array], count: jax.Array, idx: jax.Array,
+                   key: jax.Array, steps: int | None):
+    """Interactions at logical indices ``idx`` [B, W] with out-of-range ones masked.
+
+    With ``steps`` = S, each interaction is represented by S of its transitions: S - 1 drawn
+    uniformly from the steps before its last, plus the last step (how it ended is what the
+    partner reacts to). LILI's original code encoded 8 such transitions; encoding every step of
+    every sampled interaction dominated the update cost (calibration note, point 5).
+    """
+    capacity, horizon = arrays["rew"].shape
     ok = (idx >= 0) & (idx > count - 1 - capacity) & (idx < count)
     slots = jnp.mod(idx, capacity)
-    out = {k: arrays[k][slots] for k in FIELDS}
-    out["valid"] = out["valid"] & ok[..., None]
+    length = arrays["length"][slots]
+    if steps is None:
+        out = {k: arrays[k][slots] for k in FIELDS}
+        t = jnp.broadcast_to(jnp.arange(horizon), out["valid"].shape)
+        out["valid"] = out["valid"] & ok[..., None]
+    else:
+        u = jax.random.uniform(key, (*idx.shape, steps - 1))
+        early = jnp.minimum((u * (length[..., None] - 1)).astype(jnp.int32),
+                            jnp.maximum(length[..., None] - 2, 0))
+        t = jnp.concatenate([early, length[..., None] - 1], -1)
+        rows = slots[..., None]
+        out = {k: arrays[k][rows, t] for k in FIELDS}
+        out["valid"] = jnp.broadcast_to(ok[..., None], t.shape)
+    out["t"] = t
+    out["last"] = (t == length[..., None] - 1) & out["valid"]
     return out
 
 
@@ -107,6 +131,7 @@ def sample(
     n_interactions: int,
     per_interaction: int,
     history: int = 0,
+    window_steps: int | None = None,
 ) -> dict[str, jax.Array]:
     """Sample a batch (pure JAX; see the module docstring).
 
@@ -114,10 +139,11 @@ def sample(
     latent). Only interactions k >= N (and still fully stored with their N predecessors) are
     drawn. Returns transitions shaped [n_interactions, per_interaction, ...] with their step
     index ``t`` and ``last`` flag, ``next_first_obs`` [n_interactions, obs_dim], and, when
-    N > 0, ``window`` with fields shaped [n_interactions, N + 1, H, ...] for k-N .. k.
+    N > 0, ``window`` with fields shaped [n_interactions, N + 1, S, ...] for k-N .. k, where
+    S = H or ``window_steps`` (see :func:`_gather_window`), with each step's ``t`` and ``last``.
     """
     capacity = arrays["rew"].shape[0]
-    k_key, t_key = jax.random.split(key)
+    k_key, t_key, w_key = jax.random.split(key, 3)
     lo = jnp.maximum(history, count - capacity + history)
     k = lo + jax.random.randint(k_key, (n_interactions,), 0, jnp.maximum(count - lo, 1))
     slot = jnp.mod(k, capacity)
@@ -137,5 +163,8 @@ def sample(
     }
     if history > 0:
         idx = k[:, None] + jnp.arange(-history, 1)[None, :]
-        batch["window"] = _gather_window(arrays, count, idx)
-    return batch
+        batch["window"] = _gather_window(arrays, count, idx, w_key, window_steps)
+    # Materialise the gathered batch: left to itself XLA fuses the gathers into their
+    # consumers (the encoder's first layer) and recomputes them per use, which measured ~3x
+    # slower updates for LILI.
+    return jax.lax.optimization_barrier(batch)

@@ -38,6 +38,10 @@ class AgentConfig:
         batch_interactions, per_interaction: a batch is ``batch_interactions`` interactions
             with ``per_interaction`` transitions each (32 x 8 = 256, as in LILI's code), drawn
             uniformly over time steps (the boundary is not oversampled).
+        encoder_transitions: during updates the encoder reads this many transitions of each
+            interaction (the last one always among them; the rest uniform), None = all. LILI's
+            original code used 8. Acting always encodes every transition. 16 cuts LILI's update
+            cost by about a third on Point Mass (H = 50) against encoding all 50.
         updates_per_step: gradient updates per environment step; all updates of one
             interaction run as one fused ``lax.scan`` block.
         warmup_interactions: interactions with uniform random actions before learning starts.
@@ -78,6 +82,7 @@ class AgentConfig:
     history: int = 1
     batch_interactions: int = 32
     per_interaction: int = 8
+    encoder_transitions: int | None = 16
     updates_per_step: float = 1.0
     warmup_interactions: int = 20
     target_entropy: float | None = None
@@ -130,6 +135,9 @@ class AgentConfig:
         for name in ("phase_feature", "normalize", "target_encoder"):
             if not isinstance(getattr(self, name), bool):
                 raise bad(name, "true or false")
+        et = self.encoder_transitions
+        if et is not None and (isinstance(et, bool) or not isinstance(et, int) or et < 1):
+            raise bad("encoder_transitions", "an integer >= 1 or null (= all)")
         te = self.target_entropy
         if te is not None and (isinstance(te, bool) or not isinstance(te, (int, float))):
             raise bad("target_entropy", "a number or null (= -|A|)")

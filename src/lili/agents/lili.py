@@ -72,17 +72,14 @@ class LILI(SAC):
         return {"encoder": enc, "decoder": dec}
 
     def _features(self, norm: dict, win: dict) -> jax.Array:
-        """Per-transition encoder input from window fields shaped [..., H, ...]."""
+        """Per-transition encoder input from window fields shaped [..., steps, ...]."""
         obs, nxt = win["obs"], win["next_obs"]
         s = (obs - norm["obs_mean"]) / norm["obs_std"]
         s2 = (nxt - norm["obs_mean"]) / norm["obs_std"]
         d = (nxt - obs - norm["delta_mean"]) / norm["delta_std"]
         r = (win["rew"] - norm["rew_mean"]) / norm["rew_std"]
-        valid = win["valid"]
-        h = valid.shape[-1]
-        phase = jnp.broadcast_to(jnp.arange(h, dtype=jnp.float32) / h, valid.shape)
-        nxt_valid = jnp.concatenate([valid[..., 1:], jnp.zeros_like(valid[..., :1])], -1)
-        last = (valid & ~nxt_valid).astype(jnp.float32)
+        phase = win["t"].astype(jnp.float32) / self.horizon
+        last = win["last"].astype(jnp.float32)
         return jnp.concatenate(
             [s, win["act"], r[..., None], d, s2, phase[..., None], last[..., None]], -1)
 

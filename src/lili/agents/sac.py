@@ -298,7 +298,7 @@ class SAC:
         def body(state, k):
             k_batch, k_update = jax.random.split(k)
             batch = sample(arrays, count, k_batch, cfg.batch_interactions, cfg.per_interaction,
-                           self.history)
+                           self.history, cfg.encoder_transitions)
             return self._update(state, batch, k_update)
 
         state, metrics = jax.lax.scan(body, state, jax.random.split(key, self.n_updates))
