@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+ALGOS = ["sac", "oracle", "lili", "lili-no-influence"]
 
 
 def parse_args(description: str, algos: list[str], interactions: int, seeds: int = 3):
@@ -87,3 +88,11 @@ def report(out: Path, name: str) -> dict:
     (results / f"{name}.json").write_text(json.dumps(summary, indent=1, default=str))
     (results / f"{name}.md").write_text(table + "\n")
     return summary
+
+
+def benchmark(env: str, name: str, doc: str, interactions: int) -> dict:
+    """Command-line entry of a learning benchmark: parse flags, train the grid, report."""
+    args = parse_args(doc.splitlines()[0], ALGOS, interactions=interactions)
+    out = Path(args.out) if args.out else ROOT / "runs" / f"bench_{name}"
+    run_grid(env, args.algos, args.seeds, args.interactions, out, args.jobs, args.config)
+    return report(out, name)

@@ -7,14 +7,7 @@ beside the paper's description (LILI and Oracle near 100% success, SAC about 50%
 writes ``benchmarks/results/driving2d.{json,md}`` and curves in ``<out>/report/``.
 """
 
-from pathlib import Path
-
-from _common import ROOT, parse_args, report, run_grid
-
-ALGOS = ["sac", "oracle", "lili", "lili-no-influence"]
+from _common import benchmark
 
 if __name__ == "__main__":
-    args = parse_args(__doc__.splitlines()[0], ALGOS, interactions=1000)
-    out = Path(args.out) if args.out else ROOT / "runs" / "bench_driving2d"
-    run_grid("driving-2d", args.algos, args.seeds, args.interactions, out, args.jobs, args.config)
-    report(out, "driving2d")
+    benchmark("driving-2d", "driving2d", __doc__, interactions=1000)

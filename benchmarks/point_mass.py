@@ -8,14 +8,7 @@ interactions) beside the paper's Table (SAC -5.05, LILI -0.72, Oracle -0.54), wr
 ``<out>/report/``.
 """
 
-from pathlib import Path
-
-from _common import ROOT, parse_args, report, run_grid
-
-ALGOS = ["sac", "oracle", "lili", "lili-no-influence"]
+from _common import benchmark
 
 if __name__ == "__main__":
-    args = parse_args(__doc__.splitlines()[0], ALGOS, interactions=2000)
-    out = Path(args.out) if args.out else ROOT / "runs" / "bench_point_mass"
-    run_grid("point-mass", args.algos, args.seeds, args.interactions, out, args.jobs, args.config)
-    report(out, "point_mass")
+    benchmark("point-mass", "point_mass", __doc__, interactions=2000)

@@ -22,7 +22,7 @@ def _batch(agent, rng):
     t = jnp.broadcast_to(jnp.arange(h), (b, 2, h))
     window = {"obs": f(b, 2, h, od), "act": f(b, 2, h, ad), "rew": f(b, 2, h),
               "next_obs": f(b, 2, h, od), "valid": jnp.ones((b, 2, h), bool), "t": t,
-              "last": t == h - 1}
+              "last": t == h - 1, "weight": jnp.ones((b, 2, h))}
     return {"obs": f(b, m, od), "act": f(b, m, ad), "rew": f(b, m), "next_obs": f(b, m, od),
             "t": jnp.array([[3, 10, h - 1], [0, 7, h - 1]]),
             "last": jnp.array([[False, False, True], [False, False, True]]),
@@ -36,8 +36,8 @@ def _manual_target(agent, state, batch, key, boundary_latent):
     enc_t = state["target"]["encoder"]
     prev = {k: v[:, 0:1] for k, v in batch["window"].items()}
     cur = {k: v[:, 1:2] for k, v in batch["window"].items()}
-    z_k = agent.encoder.apply(enc_t, agent._features(norm, prev), prev["valid"])
-    z_k1 = agent.encoder.apply(enc_t, agent._features(norm, cur), cur["valid"])
+    z_k = agent.encoder.apply(enc_t, agent._features(norm, prev), prev["weight"])
+    z_k1 = agent.encoder.apply(enc_t, agent._features(norm, cur), cur["weight"])
     rows = []
     for i in range(2):
         row = []

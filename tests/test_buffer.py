@@ -115,3 +115,30 @@ def test_subsampled_window_always_holds_the_last_step():
     np.testing.assert_array_equal(win["rew"] % 1000, win["t"])
     owner = np.broadcast_to(np.stack([k - 1, k], -1)[..., None], win["t"].shape)
     np.testing.assert_array_equal(win["obs"][..., 0], owner)
+
+
+def test_full_window_weights_match_the_expected_training_sample():
+    from lili.buffer import pooling_weights
+
+    buf = _filled(3, horizon=10, lengths=[10, 4, 1])
+    w = buf.window(2, 3, steps=5)["weight"]
+    # Interaction 0: 9 early steps share 4/5, the last weighs 1/5 (relative to a total of 5).
+    np.testing.assert_allclose(w[0], [4 / 9] * 9 + [1.0])
+    np.testing.assert_allclose(w[1], [4 / 3] * 3 + [1.0] + [0.0] * 6)
+    np.testing.assert_allclose(w[2], [1.0] + [0.0] * 9)
+    np.testing.assert_array_equal(buf.window(2, 3)["weight"], buf.window(2, 3)["valid"])
+    # Monte Carlo: the mean over sampled windows matches the weighted mean over the full one.
+    arrays = {k: jnp.asarray(v) for k, v in buf.arrays.items()}
+    rews, idx = [], []
+    for s in range(300):
+        b = sample(arrays, jnp.int32(3), jax.random.PRNGKey(s), 8, 1, 1, 5)
+        rews.append(np.asarray(b["window"]["rew"])[:, 1])
+        idx.append(np.asarray(b["index"]))
+    rews, idx = np.concatenate(rews), np.concatenate(idx)
+    full = buf.window(2, 3, steps=5)
+    for k in (1, 2):
+        sampled = rews[idx == k]
+        assert len(sampled) > 50
+        want = (full["rew"][k] * full["weight"][k]).sum() / full["weight"][k].sum()
+        np.testing.assert_allclose(sampled.mean(), want, rtol=0.02)
+    assert pooling_weights(np.ones((1, 4), bool), np.array([[0, 0, 0, 1]], bool), None).sum() == 4

@@ -74,23 +74,24 @@ class TwinCritic(nn.Module):
 class Encoder(nn.Module):
     """E: the transitions of the last N interactions -> z (deterministic).
 
-    Each interaction is embedded by a per-transition MLP and a masked mean over its transitions
-    (permutation-invariant, so early termination and any H work); the N embeddings are
-    concatenated in order and mapped linearly to z.
+    Each interaction is embedded by a per-transition MLP and a weighted mean over its
+    transitions (permutation-invariant, so early termination and any H work; the weights are the
+    validity mask, see ``InteractionBuffer.window`` for when they are not all 0/1); the N
+    embeddings are concatenated in order and mapped linearly to z.
 
-    Input ``x``: [..., N, H, features]; ``mask``: [..., N, H].
+    Input ``x``: [..., N, S, features]; ``weight``: [..., N, S] (0 for padding).
     """
 
     hidden: Sequence[int]
     latent_dim: int
 
     @nn.compact
-    def __call__(self, x: jax.Array, mask: jax.Array) -> jax.Array:
+    def __call__(self, x: jax.Array, weight: jax.Array) -> jax.Array:
         h = x
         for width in self.hidden:
             h = nn.relu(nn.Dense(width)(h))
-        m = mask[..., None].astype(h.dtype)
-        pooled = (h * m).sum(-2) / jnp.maximum(m.sum(-2), 1.0)
+        w = weight[..., None].astype(h.dtype)
+        pooled = (h * w).sum(-2) / jnp.maximum(w.sum(-2), 1e-6)
         pooled = pooled.reshape(*pooled.shape[:-2], -1)
         return nn.Dense(self.latent_dim)(pooled)
 

@@ -84,7 +84,7 @@ class LILI(SAC):
             [s, win["act"], r[..., None], d, s2, phase[..., None], last[..., None]], -1)
 
     def _encode(self, enc: Params, norm: dict, win: dict) -> jax.Array:
-        return self.encoder.apply(enc, self._features(norm, win), win["valid"])
+        return self.encoder.apply(enc, self._features(norm, win), win["weight"])
 
     def _latents(self, model: Params, target: Params, norm: dict, batch: dict):
         win = batch["window"]

@@ -325,7 +325,7 @@ class SAC:
         if not self.uses_latent:
             return self.initial_state()
         buf = self.buffer if buffer is None else buf_check(buffer)
-        window = buf.window(buf.count - 1, self.history)
+        window = buf.window(buf.count - 1, self.history, self.config.encoder_transitions)
         z = self._jit_latent(self.state["model"], self.state["norm"], window)
         return LatentState(np.asarray(z, np.float32), 0)
 
