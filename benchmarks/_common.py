@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -87,6 +88,8 @@ def report(out: Path, name: str) -> dict:
     results.mkdir(exist_ok=True)
     (results / f"{name}.json").write_text(json.dumps(summary, indent=1, default=str))
     (results / f"{name}.md").write_text(table + "\n")
+    for png in (out / "report").glob("*.png"):
+        shutil.copy(png, results / f"{name}_{png.name}")
     return summary
 
 
