@@ -20,9 +20,13 @@ $(VENV)/.dev: $(BIN)/lili
 
 dev: $(VENV)/.dev
 
+QUICK := runs/quickstart
+# A second `make run` continues (or just re-reports) the same run instead of refusing to overwrite it.
+RESUME = $(if $(wildcard $(QUICK)/PointMass-v0/lili/seed_0/metrics.csv),--resume,)
+
 run: venv
-	$(BIN)/lili train point-mass --algo lili --seed 0 --interactions $(INTERACTIONS) --out runs/quickstart
-	$(BIN)/lili report runs/quickstart --out runs/quickstart/report
+	$(BIN)/lili train point-mass --algo lili --seed 0 --interactions $(INTERACTIONS) --out $(QUICK) $(RESUME)
+	$(BIN)/lili report $(QUICK) --out $(QUICK)/report
 
 test: dev
 	$(BIN)/ruff check src tests benchmarks
