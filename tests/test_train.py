@@ -103,3 +103,26 @@ def test_lili_learns_driving_2d():
     rows = train(agent, 400)
     success = np.mean([r["success"] for r in rows[-50:]])
     assert success >= 0.6, success
+
+
+class _Endless(gym.Env):
+    """Claims a horizon of 3 but never ends an interaction: breaks the contract."""
+
+    horizon = 3
+    observation_space = gym.spaces.Box(-1, 1, (1,), np.float32)
+    action_space = gym.spaces.Box(-1, 1, (1,), np.float32)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return np.zeros(1, np.float32), {}
+
+    def step(self, action):
+        return np.zeros(1, np.float32), 0.0, False, False, {}
+
+
+def test_training_on_an_env_that_breaks_the_contract_fails_clearly():
+    from lili.envs.checker import EnvContractError
+
+    agent = SAC(_Endless(), AgentConfig.from_dict(FAST))
+    with pytest.raises(EnvContractError, match="did not end within the env's horizon \\(3"):
+        train(agent, 1)

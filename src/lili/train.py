@@ -46,7 +46,9 @@ def rollout(
     success = None
     for t in range(horizon + 1):
         if t == horizon:
-            raise RuntimeError(
+            from lili.envs.checker import EnvContractError
+
+            raise EnvContractError(
                 f"the interaction did not end within the env's horizon ({horizon} steps): "
                 "a RepeatedInteractionEnv must terminate or truncate by then"
             )

@@ -406,8 +406,7 @@ class SAC:
 
     def train_block(self, key: jax.Array) -> dict[str, float]:
         """Run one fused block of ``n_updates`` gradient updates on the buffer."""
-        arrays = {k: v for k, v in self.buffer.arrays.items()}
-        self.state, metrics = self._jit_block(self.state, arrays,
+        self.state, metrics = self._jit_block(self.state, self.buffer.arrays,
                                               jnp.asarray(self.buffer.count, jnp.int32), key)
         return {k: float(v) for k, v in metrics.items()}
 
