@@ -75,13 +75,7 @@ class InteractionBuffer:
         training, a shift of the latent that measurably hurt (README example: 0.96 -> 0.5).
         """
         idx = np.arange(end - n + 1, end + 1)
-        ok = (idx >= 0) & (idx > self.count - 1 - self.capacity) & (idx < self.count)
-        slots = np.mod(idx, self.capacity)
-        out = {k: self.arrays[k][slots] for k in FIELDS}
-        out["valid"] = out["valid"] & ok[:, None]
-        t = np.broadcast_to(np.arange(self.horizon), out["valid"].shape)
-        out["t"] = t
-        out["last"] = (t == self.arrays["length"][slots][:, None] - 1) & out["valid"]
+        out = _gather_window(self.arrays, self.count, idx, None, None)
         out["weight"] = pooling_weights(out["valid"], out["last"], steps)
         return out
 

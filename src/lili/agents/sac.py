@@ -324,7 +324,9 @@ class SAC:
         """
         if not self.uses_latent:
             return self.initial_state()
-        buf = self.buffer if buffer is None else buf_check(buffer)
+        buf = self.buffer if buffer is None else buffer
+        if buf.count < 1:
+            raise ValueError("the buffer holds no interaction yet")
         window = buf.window(buf.count - 1, self.history, self.config.encoder_transitions)
         z = self._jit_latent(self.state["model"], self.state["norm"], window)
         return LatentState(np.asarray(z, np.float32), 0)
@@ -488,12 +490,6 @@ class SAC:
                     f"{source} was saved for an env with {key}={meta[key]}; this env has "
                     f"{key}={getattr(self, key)}"
                 )
-
-
-def buf_check(buffer: InteractionBuffer) -> InteractionBuffer:
-    if buffer.count < 1:
-        raise ValueError("the buffer holds no interaction yet")
-    return buffer
 
 
 def read_agent_file(path: str | Path) -> tuple[dict[str, Any], bytes]:
