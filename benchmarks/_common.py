@@ -35,7 +35,9 @@ def run_grid(env: str, algos: list[str], seeds: int, interactions: int, out: Pat
              config: str | None = None, env_kwargs: tuple[str, ...] = ()) -> None:
     """Train every (algo, seed) with ``lili train`` (skip finished runs, resume killed ones)."""
     lili = str(Path(sys.executable).parent / "lili")
-    env_dir = {"point-mass": "PointMass-v0", "driving-2d": "Driving2D-v0"}.get(env, env)
+    from lili.envs import resolve_env_id
+
+    env_dir = resolve_env_id(env).split("/")[-1]
     queue = []
     for seed in range(seeds):
         for algo in algos:
@@ -93,9 +95,10 @@ def report(out: Path, name: str) -> dict:
     return summary
 
 
-def benchmark(env: str, name: str, doc: str, interactions: int) -> dict:
+def benchmark(env: str, name: str, doc: str, interactions: int,
+              algos: list[str] | None = None) -> dict:
     """Command-line entry of a learning benchmark: parse flags, train the grid, report."""
-    args = parse_args(doc.splitlines()[0], ALGOS, interactions=interactions)
+    args = parse_args(doc.splitlines()[0], algos or ALGOS, interactions=interactions)
     out = Path(args.out) if args.out else ROOT / "runs" / f"bench_{name}"
     run_grid(env, args.algos, args.seeds, args.interactions, out, args.jobs, args.config)
     return report(out, name)

@@ -195,6 +195,15 @@ def test_markdown_table(runs_dir: Path) -> None:
     assert PAPER[DR]["text"] in md
 
 
+def test_wall_time_per_run(runs_dir: Path) -> None:
+    summary = summarize(find_runs([runs_dir]))
+    # Every fixture run logs wall_time = 0.01 * i, so the last row of N interactions gives this.
+    assert _row(summary, PM, "lili")["wall_time_mean"] == pytest.approx(0.01 * (N - 1))
+    md = markdown_table(summary)
+    assert "| wall time / run |" in md
+    assert "| -0.72 (gap 0.96) | 1 s |" in md
+
+
 def test_moving_average() -> None:
     y = np.array([1.0, 2.0, 3.0, 4.0, np.nan, 6.0])
     np.testing.assert_allclose(moving_average(y, 3), [1.0, 1.5, 2.0, 3.0, 3.5, 5.0])

@@ -418,7 +418,8 @@ def summarize(runs: Iterable[Run], frac: float = 0.1) -> list[dict[str, Any]]:
     env defines no success), ``gap_closed`` = (R - R_sac) / (R_oracle - R_sac) on the mean final
     returns (None unless SAC and Oracle both ran on the env and differ), ``paper_return`` and
     ``paper_gap_closed`` (None when the paper gives no number) and ``paper_text`` (None or the
-    paper's qualitative statement). s.e. = std(ddof=1) / sqrt(n), 0 with one seed. Runs with no
+    paper's qualitative statement), ``wall_time_mean`` (seconds per run, None without a
+    ``wall_time`` column). s.e. = std(ddof=1) / sqrt(n), 0 with one seed. Runs with no
     interaction logged yet are left out.
     """
     rows: list[dict[str, Any]] = []
@@ -433,6 +434,8 @@ def summarize(runs: Iterable[Run], frac: float = 0.1) -> list[dict[str, Any]]:
             r_mean, r_se = _mean_se(returns)
             s_mean, s_se = _mean_se(successes)
             budgets = [r.budget for r in group if r.budget is not None]
+            walls = [float(r.metrics["wall_time"][-1]) for r in group
+                     if r.has_metric("wall_time")]
             env_rows.append({
                 "env": env,
                 "algo": algo,
@@ -451,6 +454,7 @@ def summarize(runs: Iterable[Run], frac: float = 0.1) -> list[dict[str, Any]]:
                 "paper_return": paper_returns.get(algo),
                 "paper_gap_closed": _gap(paper_returns, algo),
                 "paper_text": paper.get("success_text", {}).get(algo),
+                "wall_time_mean": float(np.mean(walls)) if walls else None,
             })
         means = {row["algo"]: row["return_mean"] for row in env_rows}
         for row in env_rows:
@@ -479,13 +483,19 @@ def _fmt(value: float | None, se: float | None, spec: str = ".2f", pct: bool = F
     return f"{value:{spec}} ± {(se or 0.0):{spec}}"
 
 
+def _fmt_duration(seconds: float | None) -> str:
+    if seconds is None:
+        return "—"
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min"
+
+
 def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
     """Markdown with one table per env.
 
     ``summary`` is the list from :func:`summarize` or the dict that :func:`write_report`
     returns (its ``"summary"`` is used). Columns: algo | seeds | final return (mean ± s.e.) |
-    success (mean ± s.e. or —) | gap closed | paper. Below each table: the paper's source, or
-    its statement where it gives no numbers.
+    success (mean ± s.e. or —) | gap closed | paper | wall time per run. Below each table: the
+    paper's source, or its statement where it gives no numbers.
     """
     if isinstance(summary, dict):
         if "summary" not in summary:
@@ -500,8 +510,8 @@ def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
             f"### {_env_title(env)}",
             "",
             "| algo | seeds | final return (mean ± s.e.) | success (mean ± s.e.) "
-            "| gap closed | paper |",
-            "|---|---:|---:|---:|---:|---|",
+            "| gap closed | paper | wall time / run |",
+            "|---|---:|---:|---:|---:|---|---:|",
         ]
         for row in rows:
             gap = "—" if row["gap_closed"] is None else f"{row['gap_closed']:.2f}"
@@ -521,7 +531,7 @@ def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
                 f"| {algo_label(row['algo'])} | {seeds} "
                 f"| {_fmt(row['return_mean'], row['return_se'])} "
                 f"| {_fmt(row['success_mean'], row['success_se'], pct=True)} "
-                f"| {gap} | {paper} |"
+                f"| {gap} | {paper} | {_fmt_duration(row.get('wall_time_mean'))} |"
             )
         ref = paper_reference(env) or {}
         notes = []
