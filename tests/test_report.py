@@ -19,6 +19,7 @@ from lili.report import (
     moving_average,
     plot_learning_curves,
     plot_strategy_heatmap,
+    strategy_frequencies,
     summarize,
     write_report,
 )
@@ -195,6 +196,25 @@ def test_markdown_table(runs_dir: Path) -> None:
     assert PAPER[DR]["text"] in md
 
 
+def test_strategy_frequencies(runs_dir: Path, tmp_path: Path) -> None:
+    runs = find_runs([runs_dir])
+    driving = [r for r in runs if r.env == DR and r.algo == "lili"]
+    # The fixture's driving partner alternates ids 0, 1, 0, ...
+    np.testing.assert_allclose(strategy_frequencies(driving), [0.5, 0.5])
+    assert strategy_frequencies([r for r in runs if r.env == PM]) is None  # ids are -1
+    # An air hockey run whose striker ends up firing left 3 times in 4: the table names the
+    # strategies as the paper does and cites the paper's block rate.
+    ids = [0, 0, 0, 2] * 50
+    csv = "interaction,return,success,strategy_id\n" + "".join(
+        f"{i},1.5,1,{sid}\n" for i, sid in enumerate(ids))
+    _write_run(tmp_path / "hockey", "lili/AirHockey-v0", "lili", 0, n=len(ids), csv=csv)
+    summary = summarize(find_runs([tmp_path / "hockey"]))
+    assert summary[0]["strategy_freq"] == pytest.approx([0.75, 0.0, 0.25])
+    md = markdown_table(summary)
+    assert "LILI: partner played left 75%, middle 0%, right 25% over the last 200" in md
+    assert "| 1.15, success 91% |" in md
+
+
 def test_wall_time_per_run(runs_dir: Path) -> None:
     summary = summarize(find_runs([runs_dir]))
     # Every fixture run logs wall_time = 0.01 * i, so the last row of N interactions gives this.
@@ -220,10 +240,10 @@ def _is_png(path: Path) -> bool:
 def test_write_report_all_files(runs_dir: Path, tmp_path: Path) -> None:
     out = tmp_path / "report"
     result = write_report([runs_dir], out)
-    for name in ("curves.png", "success.png", "heatmap.png"):
+    for name in ("curves.png", "success.png", "heatmap.png", "strategies.png"):
         assert _is_png(out / name), name
-    assert set(result["files"]) == {"curves.png", "success.png", "heatmap.png", "results.md",
-                                    "results.json"}
+    assert set(result["files"]) == {"curves.png", "success.png", "heatmap.png", "strategies.png",
+                                    "results.md", "results.json"}
     assert (out / "results.md").read_text() == result["markdown"]
     # The CLI prints markdown_table(write_report(...)): the returned dict is accepted too.
     assert markdown_table(result) == result["markdown"] == markdown_table(result["summary"])

@@ -44,6 +44,8 @@ __all__ = [
     "moving_average",
     "plot_learning_curves",
     "plot_strategy_heatmap",
+    "plot_strategy_frequencies",
+    "strategy_frequencies",
     "summarize",
     "write_report",
 ]
@@ -74,16 +76,40 @@ PAPER: dict[str, dict[str, Any]] = {
         },
         "source": "Xie et al., CoRL 2020 (LILI), appendix (Driving 2D): no numbers given",
     },
+    "lili/LunarLander-v0": {
+        "text": "LILI close to the Oracle; SAC about 50% (lands on one pad)",
+        "success_text": {"sac": "about 50%", "lili": "close to the Oracle"},
+        "source": "Xie et al., CoRL 2020 (LILI), results figure (Lunar Lander): no table",
+    },
+    "lili/DrivingSteer-v0": {
+        "text": "Oracle and LILI (no influence) converge to always passing; SAC about 50% "
+                "(mixes lanes); SLAC and LILAC keep choosing the same lane and collide",
+        "success_text": {"sac": "about 50%", "oracle": "near 100%",
+                         "lili-no-influence": "near 100% (slowly)"},
+        "source": "Xie et al., CoRL 2020 (LILI), appendix (Driving CARLA): no numbers given",
+    },
+    "lili/AirHockey-v0": {
+        "success": {"random": 0.18, "sac": 0.44, "lili": 0.91},
+        "return": {"lili": 1.15, "lili-no-influence": 1.0},
+        "return_se": {"lili": 0.05, "lili-no-influence": 0.05},
+        "strategy_freq": {"lili": {"left": 0.41}, "lili-no-influence": "uniform"},
+        "strategy_names": ["left", "middle", "right"],
+        "text": "block rate over the last 100 interactions: random 18%, SAC 44%, LILI 91%; "
+                "striker over the last 200: LILI 41% left, LILI (no influence) uniform",
+        "source": "Xie et al., CoRL 2020 (LILI), air hockey figure (two Panda arms)",
+    },
 }
 """Reference results of the paper, keyed by registered env id.
 
 ``return`` maps algo -> final return (mean over the paper's ``seeds`` seeds). ``text`` is a
 qualitative description where the paper gives no numbers; ``success_text`` is the per-algo part
-of it that the markdown table shows.
+of it that the markdown table shows. ``success`` maps algo -> success rate where the paper gives
+one; ``strategy_names`` names the partner's discrete strategies (``strategy_id`` 0, 1, ...).
 """
 
-ALGO_ORDER = ("sac", "slac", "lili-no-influence", "lili", "lilac", "oracle")
+ALGO_ORDER = ("random", "sac", "slac", "lili-no-influence", "lili", "lilac", "oracle")
 ALGO_LABELS = {
+    "random": "Random",
     "sac": "SAC",
     "slac": "SLAC",
     "lili-no-influence": "LILI (no influence)",
@@ -92,6 +118,7 @@ ALGO_LABELS = {
     "oracle": "Oracle",
 }
 ALGO_COLORS = {
+    "random": "#7f7f7f",
     "sac": "#1f77b4",
     "slac": "#9467bd",
     "lili-no-influence": "#ff7f0e",
@@ -100,8 +127,11 @@ ALGO_COLORS = {
     "oracle": "#2ca02c",
 }
 _EXTRA_COLORS = ("#e377c2", "#bcbd22", "#17becf", "#7f7f7f", "#000000", "#aec7e8")
-_ENV_TITLES = {"pointmass": "Point Mass", "driving2d": "Driving (2D)"}
-_ENV_ORDER = ("pointmass", "driving2d")
+_ENV_TITLES = {"pointmass": "Point Mass", "driving2d": "Driving (2D)",
+               "lunarlander": "Lunar Lander", "drivingsteer": "Driving (steering)",
+               "airhockey": "Air hockey"}
+_ENV_ORDER = ("pointmass", "lunarlander", "driving2d", "drivingsteer", "airhockey")
+STRATEGY_WINDOW = 200
 DPI = 120
 
 
@@ -419,7 +449,9 @@ def summarize(runs: Iterable[Run], frac: float = 0.1) -> list[dict[str, Any]]:
     returns (None unless SAC and Oracle both ran on the env and differ), ``paper_return`` and
     ``paper_gap_closed`` (None when the paper gives no number) and ``paper_text`` (None or the
     paper's qualitative statement), ``wall_time_mean`` (seconds per run, None without a
-    ``wall_time`` column). s.e. = std(ddof=1) / sqrt(n), 0 with one seed. Runs with no
+    ``wall_time`` column), ``paper_success`` (None or the paper's success rate) and
+    ``strategy_freq`` (see :func:`strategy_frequencies`; None without strategy ids).
+    s.e. = std(ddof=1) / sqrt(n), 0 with one seed. Runs with no
     interaction logged yet are left out.
     """
     rows: list[dict[str, Any]] = []
@@ -436,6 +468,7 @@ def summarize(runs: Iterable[Run], frac: float = 0.1) -> list[dict[str, Any]]:
             budgets = [r.budget for r in group if r.budget is not None]
             walls = [float(r.metrics["wall_time"][-1]) for r in group
                      if r.has_metric("wall_time")]
+            freq = strategy_frequencies(group)
             env_rows.append({
                 "env": env,
                 "algo": algo,
@@ -455,6 +488,8 @@ def summarize(runs: Iterable[Run], frac: float = 0.1) -> list[dict[str, Any]]:
                 "paper_gap_closed": _gap(paper_returns, algo),
                 "paper_text": paper.get("success_text", {}).get(algo),
                 "wall_time_mean": float(np.mean(walls)) if walls else None,
+                "paper_success": paper.get("success", {}).get(algo),
+                "strategy_freq": None if freq is None else freq.tolist(),
             })
         means = {row["algo"]: row["return_mean"] for row in env_rows}
         for row in env_rows:
@@ -515,14 +550,16 @@ def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
         ]
         for row in rows:
             gap = "—" if row["gap_closed"] is None else f"{row['gap_closed']:.2f}"
+            cited = []
             if row.get("paper_return") is not None:
-                paper = f"{row['paper_return']:.2f}"
+                cited.append(f"{row['paper_return']:.2f}")
                 if row.get("paper_gap_closed") is not None and row["algo"] not in ("sac", "oracle"):
-                    paper += f" (gap {row['paper_gap_closed']:.2f})"
+                    cited[-1] += f" (gap {row['paper_gap_closed']:.2f})"
+            if row.get("paper_success") is not None:
+                cited.append(f"success {100 * row['paper_success']:.0f}%")
             elif row.get("paper_text"):
-                paper = f"success {row['paper_text']}"
-            else:
-                paper = "—"
+                cited.append(f"success {row['paper_text']}")
+            paper = ", ".join(cited) or "—"
             interactions = row.get("interactions_min")
             seeds = f"{row['n']}"
             if interactions is not None and row.get("budget") and interactions < row["budget"]:
@@ -535,6 +572,14 @@ def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
             )
         ref = paper_reference(env) or {}
         notes = []
+        if "strategy_names" in ref:
+            for row in rows:
+                if row.get("strategy_freq"):
+                    names = strategy_names(env, len(row["strategy_freq"]))
+                    shares = ", ".join(f"{name} {100 * f:.0f}%"
+                                       for name, f in zip(names, row["strategy_freq"], strict=True))
+                    notes.append(f"{algo_label(row['algo'])}: partner played {shares} over the "
+                                 f"last {STRATEGY_WINDOW} interactions.")
         if "return" in ref:
             seeds = ref.get("seeds", "?")
             notes.append(f"Paper: final return over {seeds} seeds ({ref['source']}).")
@@ -742,6 +787,81 @@ def plot_strategy_heatmap(runs: Iterable[Run], out_png: str | Path, last: int = 
     return out_png
 
 
+def strategy_frequencies(runs: Iterable[Run], last: int = STRATEGY_WINDOW) -> np.ndarray | None:
+    """How often the partner played each discrete strategy over the last ``last`` interactions.
+
+    Pools the runs given (e.g. the seeds of one algo); returns fractions indexed by
+    ``strategy_id`` (length = largest id seen + 1), or None when no run logs an id >= 0.
+    """
+    counts: list[np.ndarray] = []
+    for run in runs:
+        ids = run.metrics.get("strategy_id")
+        if ids is None:
+            continue
+        ids = ids[-last:]
+        ids = ids[~np.isnan(ids) & (ids >= 0)].astype(int)
+        if ids.size:
+            counts.append(np.bincount(ids))
+    if not counts:
+        return None
+    total = np.zeros(max(len(c) for c in counts))
+    for c in counts:
+        total[: len(c)] += c
+    return total / total.sum()
+
+
+def strategy_names(env: str, n: int) -> list[str]:
+    """Names of strategies 0..n-1 (the paper's where known, else ``id k``)."""
+    names = (paper_reference(env) or {}).get("strategy_names", [])
+    return [names[k] if k < len(names) else f"id {k}" for k in range(n)]
+
+
+def plot_strategy_frequencies(runs: Iterable[Run], out_png: str | Path,
+                              last: int = STRATEGY_WINDOW) -> Path:
+    """Bars of how often the partner played each strategy at the end, per env and algo.
+
+    Like the paper's air hockey figure (how often the striker fired left, middle, right over
+    the final 200 interactions): one subplot per env with discrete strategy ids, one group of
+    bars per strategy, one bar per algo (seeds pooled). Raises ValueError when no run logs a
+    strategy id. Returns the path written.
+    """
+    panels = []
+    for env, by_algo in _group(runs).items():
+        freqs = {algo: f for algo, group in by_algo.items()
+                 if (f := strategy_frequencies(group, last)) is not None}
+        if freqs:
+            panels.append((env, freqs, {a: len(by_algo[a]) for a in freqs}))
+    if not panels:
+        raise ValueError("no run with a strategy_id column to plot")
+    plt = _pyplot()
+    nrows, ncols = _grid(len(panels))
+    fig, axes = plt.subplots(nrows, ncols, figsize=(5.6 * ncols, 3.8 * nrows), squeeze=False)
+    for ax, (env, freqs, seeds) in zip(axes.flat, panels, strict=False):
+        k = max(len(f) for f in freqs.values())
+        width = 0.8 / len(freqs)
+        for j, (algo, f) in enumerate(freqs.items()):
+            f = np.pad(f, (0, k - len(f)))
+            xs = np.arange(k) + (j - (len(freqs) - 1) / 2) * width
+            n = seeds[algo]
+            ax.bar(xs, f, width, color=algo_color(algo),
+                   label=f"{algo_label(algo)} ({n} seed{'s' * (n > 1)})")
+        ax.axhline(1.0 / k, color="0.4", ls=":", lw=1.0, label="uniform")
+        ax.set_xticks(np.arange(k), strategy_names(env, k))
+        ax.set_ylim(0, 1)
+        ax.set_ylabel(f"fraction of the last {last} interactions")
+        ax.set_title(_env_title(env), fontsize=11)
+        ax.grid(True, axis="y", alpha=0.3)
+        ax.legend(fontsize=8, framealpha=0.85)
+    for ax in list(axes.flat)[len(panels):]:
+        ax.set_visible(False)
+    fig.suptitle("Partner's strategy at the end of training", fontsize=12)
+    fig.tight_layout()
+    out_png = Path(out_png)
+    fig.savefig(out_png, dpi=DPI)
+    plt.close(fig)
+    return out_png
+
+
 # ------------------------------------------------------------------------------------ report
 
 
@@ -761,9 +881,10 @@ def write_report(paths: Sequence[str | Path], out_dir: str | Path) -> dict[str, 
     """Find runs under ``paths`` and write the report into ``out_dir`` (created if needed).
 
     Files: ``curves.png`` (return), ``success.png`` (only if some env defines success),
-    ``heatmap.png`` (only if there are Point Mass runs), ``results.md`` (:func:`markdown_table`)
-    and ``results.json`` (``{"summary", "runs", "paper"}``). A ``success.png`` or
-    ``heatmap.png`` left by an earlier report in ``out_dir`` is removed when not produced this
+    ``heatmap.png`` (only if there are Point Mass runs), ``strategies.png`` (only if some run
+    logs discrete strategy ids, :func:`plot_strategy_frequencies`), ``results.md``
+    (:func:`markdown_table`) and ``results.json`` (``{"summary", "runs", "paper"}``). An optional
+    PNG left by an earlier report in ``out_dir`` is removed when not produced this
     time. Prints nothing.
 
     Returns ``{"summary": summarize(...), "markdown": str, "runs": [run folders],
@@ -787,6 +908,8 @@ def write_report(paths: Sequence[str | Path], out_dir: str | Path) -> dict[str, 
         "heatmap.png": (any("pointmass" in _env_key(r.env) and r.strategy is not None
                             and r.n_interactions for r in runs),
                         lambda p: plot_strategy_heatmap(runs, p)),
+        "strategies.png": (any(strategy_frequencies([r]) is not None for r in runs),
+                           lambda p: plot_strategy_frequencies(runs, p)),
     }
     for name, (wanted, plot) in optional.items():
         target = out_dir / name
