@@ -34,6 +34,8 @@ def _parse_kwargs(items: list[str]) -> dict[str, Any]:
 def _make_env(env_id: str, kwargs: dict[str, Any], render_mode: str | None = None):
     import gymnasium as gym
 
+    import lili.envs  # noqa: F401 - registers the ids (``lili eval`` reaches here first)
+
     try:
         if render_mode is not None:
             kwargs = {**kwargs, "render_mode": render_mode}
