@@ -150,6 +150,9 @@ class RepeatedInteractionEnv(gym.Env):
 ENV_ALIASES: dict[str, str] = {
     "point-mass": "lili/PointMass-v0",
     "driving-2d": "lili/Driving2D-v0",
+    "lunar-lander": "lili/LunarLander-v0",
+    "driving-steer": "lili/DrivingSteer-v0",
+    "air-hockey": "lili/AirHockey-v0",
 }
 
 
@@ -172,6 +175,9 @@ def register_envs() -> None:
     specs = {
         "lili/PointMass-v0": "lili.envs.point_mass:PointMassEnv",
         "lili/Driving2D-v0": "lili.envs.driving2d:Driving2DEnv",
+        "lili/LunarLander-v0": "lili.envs.lunar_lander:LunarLanderEnv",
+        "lili/DrivingSteer-v0": "lili.envs.driving_steer:DrivingSteerEnv",
+        "lili/AirHockey-v0": "lili.envs.air_hockey:AirHockeyEnv",
     }
     for env_id, entry in specs.items():
         if env_id not in gym.registry:
