@@ -67,6 +67,8 @@ class AgentConfig:
             the unchanged z^i). Set by the agent; override only to compare readings.
         buffer_capacity: interactions kept (ring buffer).
         checkpoint_every: interactions between checkpoints in a run folder.
+        extra: options of one agent, keyed by its name, e.g. ``{"slac": {"model_every": 2}}``
+            (see ``lili.agents.slac.SLAC_OPTIONS``); each agent checks its own entry.
     """
 
     gamma: float = 0.99

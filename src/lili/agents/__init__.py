@@ -6,14 +6,17 @@ from pathlib import Path
 
 import gymnasium as gym
 
+from lili.agents.lilac import LILAC
 from lili.agents.lili import LILI
+from lili.agents.random_policy import RandomPolicy
 from lili.agents.sac import SAC, CheckpointError, LatentState, Oracle, read_agent_file
+from lili.agents.slac import SLAC
 from lili.config import AgentConfig
 
-__all__ = ["SAC", "Oracle", "LILI", "ALGOS", "make_agent", "load_agent", "CheckpointError",
-           "LatentState"]
+__all__ = ["SAC", "Oracle", "LILI", "LILAC", "ALGOS", "make_agent", "load_agent", "CheckpointError",
+           "LatentState", "SLAC", "RandomPolicy"]
 
-ALGOS = ("sac", "oracle", "lili", "lili-no-influence")
+ALGOS = ("sac", "oracle", "lili", "lili-no-influence", "lilac", "slac", "random")
 
 
 def make_agent(algo: str, env: gym.Env, config: AgentConfig | dict | None = None,
@@ -25,6 +28,12 @@ def make_agent(algo: str, env: gym.Env, config: AgentConfig | dict | None = None
         return Oracle(env, config, seed)
     if algo in ("lili", "lili-no-influence"):
         return LILI(env, config, seed, influence=algo == "lili")
+    if algo == "lilac":
+        return LILAC(env, config, seed)
+    if algo == "slac":
+        return SLAC(env, config, seed)
+    if algo == "random":
+        return RandomPolicy(env, config, seed)
     raise ValueError(f"unknown algo {algo!r}; allowed: {', '.join(ALGOS)}")
 
 

@@ -156,13 +156,17 @@ class SAC:
     def _init_latent(self, key: jax.Array) -> dict[str, Params]:
         return {}
 
+    def _input_dims(self) -> tuple[int, int]:
+        """Sizes of the critic's and the actor's state input (SAC, LILI: the same x)."""
+        return self.x_dim, self.x_dim
+
     def _init_state(self, key: jax.Array) -> dict[str, Any]:
         ka, kc, kl = jax.random.split(key, 3)
-        x = jnp.zeros((1, self.x_dim))
+        x_critic, x_actor = self._input_dims()
         a = jnp.zeros((1, self.act_dim))
-        model = {"critic": self.critic.init(kc, x, a)}
+        model = {"critic": self.critic.init(kc, jnp.zeros((1, x_critic)), a)}
         model.update(self._init_latent(kl))
-        actor = self.actor.init(ka, x)
+        actor = self.actor.init(ka, jnp.zeros((1, x_actor)))
         target = {k: v for k, v in model.items() if k in ("critic", "encoder")}
         od = self.obs_dim
         norm = {
@@ -210,6 +214,22 @@ class SAC:
         return jnp.concatenate([x, jnp.broadcast_to(z[:, None, :], (*x.shape[:-1], z.shape[-1]))],
                                -1)
 
+    def _target_inputs(self, state: dict, batch: dict) -> tuple[jax.Array, jax.Array]:
+        """(critic input, actor input) at the next state of every transition ([B, M, .]).
+
+        SAC and LILI feed both the same x: the next observation and phase with z^k, or at the
+        last step the next interaction's first observation with the boundary mode's latent.
+        """
+        norm = state["norm"]
+        _, zbar, zbar_next = self._latents(state["model"], state["target"], norm, batch)
+        zbar, zbar_next = sg(zbar), sg(zbar_next)
+        x_within = self._with_z(self._x(norm, batch["next_obs"], batch["t"] + 1), zbar)
+        first = jnp.broadcast_to(batch["next_first_obs"][:, None], batch["obs"].shape)
+        z_boundary = zbar_next if self.boundary == "influence" else zbar
+        x_boundary = self._with_z(self._x(norm, first, 0.0), z_boundary)
+        x_next = jnp.where(batch["last"][..., None], x_boundary, x_within)
+        return x_next, x_next
+
     def critic_target(self, state: dict, batch: dict, key: jax.Array) -> jax.Array:
         """The soft Bellman target y for every transition of ``batch`` ([B, M]).
 
@@ -220,53 +240,53 @@ class SAC:
         min_j Qbar_j(s, a', z) - alpha log pi(a' | s, z), a' ~ pi(. | s, z). Target-side latents
         come from the target encoder.
         """
-        norm = state["norm"]
-        _, zbar, zbar_next = self._latents(state["model"], state["target"], norm, batch)
-        zbar, zbar_next = sg(zbar), sg(zbar_next)
-        x_within = self._with_z(self._x(norm, batch["next_obs"], batch["t"] + 1), zbar)
-        first = jnp.broadcast_to(batch["next_first_obs"][:, None], batch["obs"].shape)
-        z_boundary = zbar_next if self.boundary == "influence" else zbar
-        x_boundary = self._with_z(self._x(norm, first, 0.0), z_boundary)
-        last = batch["last"]
-        x_next = jnp.where(last[..., None], x_boundary, x_within)
-        mean, log_std = self.actor.apply(state["actor"], x_next)
+        x_critic, x_actor = self._target_inputs(state, batch)
+        mean, log_std = self.actor.apply(state["actor"], x_actor)
         a_next, logp_next = tanh_gaussian(mean, log_std, key)
-        q_next = self.critic.apply(state["target"]["critic"], x_next, a_next).min(0)
+        q_next = self.critic.apply(state["target"]["critic"], x_critic, a_next).min(0)
         v_next = q_next - jnp.exp(state["log_alpha"]) * logp_next
-        cont = 1.0 - (last & (self.boundary == "cut")).astype(jnp.float32)
+        cont = 1.0 - (batch["last"] & (self.boundary == "cut")).astype(jnp.float32)
         return sg(batch["rew"] + self.config.gamma * cont * v_next)
+
+    def _inputs(self, model: Params, state: dict, batch: dict):
+        """(critic input, actor input, z) at every transition's state ([B, M, .]).
+
+        The critic's input carries the gradient into the latent's parameters (scaled by
+        ``critic_to_encoder``, forward value unchanged); the actor sees the latent detached, so
+        only the critic and J_rep shape the encoder. The actor loss evaluates the critic on the
+        critic's input (its value only). ``z`` is what ``_rep_loss`` receives.
+        """
+        norm = state["norm"]
+        z, _, _ = self._latents(model, state["target"], norm, batch)
+        z_q = sg(z) + self.config.critic_to_encoder * (z - sg(z))
+        x = self._x(norm, batch["obs"], batch["t"])
+        return self._with_z(x, z_q), self._with_z(x, sg(z)), z
 
     def _update(self, state: dict, batch: dict, key: jax.Array) -> tuple[dict, dict]:
         cfg = self.config
-        norm = state["norm"]
         k_next, k_pi = jax.random.split(key)
         alpha = jnp.exp(state["log_alpha"])
-        with_z = self._with_z
+        norm = state["norm"]
         y = self.critic_target(state, batch, k_next)
 
         def model_loss(model: Params):
-            z, _, _ = self._latents(model, state["target"], norm, batch)
-            # Scale the critic's gradient into the encoder without changing the forward value.
-            z_q = sg(z) + cfg.critic_to_encoder * (z - sg(z))
-            x = with_z(self._x(norm, batch["obs"], batch["t"]), z_q)
+            x, x_pi, z = self._inputs(model, state, batch)
             q = self.critic.apply(model["critic"], x, batch["act"])
             critic_loss = 0.5 * ((q - y) ** 2).mean(axis=(1, 2)).sum()
             rep_loss = self._rep_loss(model, norm, batch, z)
-            return critic_loss + cfg.rep_weight * rep_loss, (critic_loss, rep_loss, z, q.mean())
+            aux = (critic_loss, rep_loss, x, x_pi, q.mean())
+            return critic_loss + cfg.rep_weight * rep_loss, aux
 
-        grads, (critic_loss, rep_loss, z, q_mean) = jax.grad(model_loss, has_aux=True)(
+        grads, (critic_loss, rep_loss, x_q, x_pi, q_mean) = jax.grad(model_loss, has_aux=True)(
             state["model"]
         )
         upd, opt_model = self.opt_model.update(grads, state["opt_model"], state["model"])
         model = optax.apply_updates(state["model"], upd)
 
-        # The actor sees the latent detached: only the critic and J_rep shape the encoder.
-        x_pi = with_z(self._x(norm, batch["obs"], batch["t"]), sg(z))
-
         def actor_loss(actor: Params):
             mean, log_std = self.actor.apply(actor, x_pi)
             a, logp = tanh_gaussian(mean, log_std, k_pi)
-            q = self.critic.apply(model["critic"], x_pi, a).min(0)
+            q = self.critic.apply(model["critic"], x_q, a).min(0)
             return (alpha * logp - q).mean(), logp
 
         (pi_loss, logp), g_actor = jax.value_and_grad(actor_loss, has_aux=True)(state["actor"])
@@ -291,15 +311,22 @@ class SAC:
                    "rep_loss": rep_loss, "q": q_mean, "entropy": -logp.mean()}
         return new_state, metrics
 
+    def _batch(self, state: dict, arrays: dict, count: jax.Array, key: jax.Array) -> dict:
+        """One training batch, drawn inside the scan (pure JAX).
+
+        Subclasses may add what the update needs and the gradient does not reach (SLAC: its
+        sequences and detached latent samples, computed once per update from ``state``).
+        """
+        cfg = self.config
+        return sample(arrays, count, key, cfg.batch_interactions, cfg.per_interaction,
+                      self.history, cfg.encoder_transitions)
+
     def _block(self, state: dict, arrays: dict, count: jax.Array, key: jax.Array):
         """All updates of one interaction as one scan (sampling inside the scan)."""
-        cfg = self.config
 
         def body(state, k):
             k_batch, k_update = jax.random.split(k)
-            batch = sample(arrays, count, k_batch, cfg.batch_interactions, cfg.per_interaction,
-                           self.history, cfg.encoder_transitions)
-            return self._update(state, batch, k_update)
+            return self._update(state, self._batch(state, arrays, count, k_batch), k_update)
 
         state, metrics = jax.lax.scan(body, state, jax.random.split(key, self.n_updates))
         return state, jax.tree_util.tree_map(jnp.mean, metrics)

@@ -1,0 +1,247 @@
+"""SLAC: sequence batches, the latent model's ELBO, acting = training inputs, save/load, resume."""
+
+import csv
+import shutil
+
+import gymnasium as gym
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+import yaml
+
+import lili.envs  # noqa: F401  (registers the envs)
+from lili import cli
+from lili.agents import SLAC, LatentState, load_agent, make_agent
+from lili.agents.slac import SLACState, sample_sequences
+from lili.buffer import InteractionBuffer
+from lili.config import AgentConfig
+from lili.runs import RunLogger, load_checkpoint
+from lili.train import train
+
+K = 8
+TINY = {"z1_dim": 4, "z2_dim": 8, "feature_dim": 8, "model_hidden": [16], "model_batch": 8,
+        "pretrain_steps": 5, "lr_model": 1e-3}
+FAST = {"hidden": [16, 16], "warmup_interactions": 3, "checkpoint_every": 4,
+        "batch_interactions": 4, "per_interaction": 4, "extra": {"slac": TINY}}
+
+
+def _tiny(slac=None, **changes):
+    cfg = {**FAST, **changes, "extra": {"slac": {**TINY, **(slac or {})}}}
+    return SLAC(gym.make("lili/PointMass-v0"), AgentConfig.from_dict(cfg))
+
+
+def _labelled_buffer(lengths, horizon=12):
+    """Interaction k, step s has obs (k, s), next_obs (k, s + 1), act (k, s), rew k + s / 100."""
+    buf = InteractionBuffer(len(lengths) + 1, horizon, 2, 2)
+    for k, n in enumerate(lengths):
+        s = np.arange(n, dtype=np.float32)
+        col = np.full(n, k, np.float32)
+        buf.add({"obs": np.stack([col, s], -1), "act": np.stack([col, s], -1),
+                 "rew": k + s / 100, "next_obs": np.stack([col, s + 1], -1)},
+                np.array([k + 1, 0], np.float32))
+    return buf
+
+
+def test_sequence_batches_never_cross_an_interaction():
+    lengths = [12, 5, 12, 9, 3, 12]  # early terminations shorter than K among them
+    buf = _labelled_buffer(lengths)
+    batch = jax.jit(sample_sequences, static_argnums=(3, 4, 5))(
+        buf.arrays, buf.count, jax.random.PRNGKey(0), 64, 6, K)
+    b = {k: np.asarray(v) for k, v in batch.items()}
+    assert b["hist_obs"].shape == (64, 6, K + 1, 2) and b["hist_act"].shape == (64, 6, K, 2)
+    assert b["win_obs"].shape == (64, 6, K + 1, 2) and b["win_rew"].shape == (64, 6, K)
+    k_of = np.broadcast_to(b["index"][:, None], b["t"].shape)
+    length = np.asarray(lengths)[k_of]
+    assert (b["t"] < length).all() and (b["obs"][..., 0] == k_of).all()
+    # The actor's history: frames t-K+1 .. t+1, valid from the interaction's start on.
+    assert (b["hist_t"] == b["t"][..., None] + np.arange(-K + 1, 2)).all()
+    assert (b["hist_valid"] == (b["hist_t"] >= 0)).all()
+    v = b["hist_valid"]
+    assert (b["hist_obs"][..., 0][v] == np.broadcast_to(k_of[..., None], v.shape)[v]).all()
+    assert (b["hist_obs"][..., 1][v] == b["hist_t"][v]).all()
+    # Actions before the start are zero; the rest belong to the same interaction and step.
+    va = v[..., :-1]
+    assert (b["hist_act"][~va] == 0).all()
+    assert (b["hist_act"][..., 1][va] == b["hist_t"][..., :-1][va]).all()
+    assert (b["hist_act"][..., 0][va] == np.broadcast_to(k_of[..., None], va.shape)[va]).all()
+    # The filter's window: K+1 frames from max(0, t-K+1), masked past the interaction's end.
+    assert (b["win_t"][..., 0] == np.maximum(b["t"] - K + 1, 0)).all()
+    assert (np.take_along_axis(b["win_t"], b["pos"][..., None], -1)[..., 0] == b["t"]).all()
+    w = b["win_valid"]
+    assert (w == (b["win_t"] <= length[..., None])).all()
+    assert (b["win_obs"][..., 0][w] == np.broadcast_to(k_of[..., None], w.shape)[w]).all()
+    assert (b["win_obs"][..., 1][w] == b["win_t"][w]).all()  # frame L is the final next_obs
+    ws = b["win_step_valid"]
+    np.testing.assert_allclose(b["win_rew"][ws],
+                               (k_of[..., None] + b["win_t"][..., :-1] / 100)[ws], rtol=1e-6)
+    assert (~w).any() and (~v).any()  # the lengths above exercise both masks
+
+
+def test_the_actor_input_is_zero_padded_at_the_start_of_an_interaction():
+    agent = _tiny()
+    state = agent.initial_state()
+    norm = agent.state["norm"]
+    history_x = jax.jit(agent.history_x)
+    for t in range(K + 2):
+        obs = np.array([t + 1.0, -1.0 - t], np.float32)  # no frame is zero by chance
+        x = np.asarray(history_x(norm, *agent.acting_input(obs, state)))
+        fx = x[: K * agent.x_dim].reshape(K, agent.x_dim)
+        n_pad = max(K - 1 - t, 0)
+        assert (fx[:n_pad] == 0).all() and (np.abs(fx[n_pad:]).sum(-1) > 0).all()
+        acts = x[K * agent.x_dim:].reshape(K - 1, agent.act_dim)
+        assert (acts[:n_pad] == 0).all()
+        _, state = agent.predict(obs, state, deterministic=False, key=jax.random.PRNGKey(t))
+    assert isinstance(state, SLACState) and state.t == K + 2
+
+
+@pytest.fixture(scope="module")
+def trained():
+    """A tiny SLAC after 3 warm-up interactions, model pretraining and 2 learning blocks.
+
+    Shared: every agent compiles its update block anew, which dominates these tests' time.
+    """
+    agent = _tiny()
+    train(agent, 5)
+    return agent
+
+
+def test_elbo_terms_are_finite_and_the_loss_decreases_on_a_fixed_batch(trained):
+    agent = trained
+    assert agent.pretrain_losses.shape == (TINY["pretrain_steps"],)
+    seq = agent._jit_model_batch(agent.buffer.arrays, jnp.asarray(agent.buffer.count),
+                                 jax.random.PRNGKey(3))
+    params, opt, norm = agent.state["slac"], agent.state["opt_slac"], agent.state["norm"]
+    losses = []
+    for _ in range(100):  # the same batch and noise every step
+        params, opt, terms = agent._jit_model_step(params, opt, norm, seq, jax.random.PRNGKey(4))
+        assert all(np.isfinite(float(v)) for v in terms.values()) and float(terms["kl"]) >= 0
+        np.testing.assert_allclose(float(terms["loss"]), float(
+            terms["obs_nll"] + terms["rew_nll"] + terms["kl"]), rtol=1e-5)
+        losses.append(float(terms["loss"]))
+    assert losses[-1] < 0.7 * losses[0], losses[::10]
+
+
+def test_acting_sees_what_training_sees_for_the_same_step(trained):
+    agent = trained  # learnt parameters and a fitted normaliser
+    env, norm = gym.make("lili/PointMass-v0"), agent.state["norm"]
+    obs, _ = env.reset(seed=5)
+    seen = []  # the actor's input at every acting step of one interaction
+
+    history_x = jax.jit(agent.history_x)
+
+    def x_of(obs, hist):
+        return np.asarray(history_x(norm, *agent.acting_input(obs, hist)))
+
+    traj = {"obs": [], "act": [], "rew": [], "next_obs": []}
+    for t in range(agent.horizon):
+        seen.append(x_of(obs, agent._rollout_state if t else agent.initial_state()))
+        a = agent.policy_action(obs, LatentState(np.zeros(0), t), jax.random.PRNGKey(t), False)
+        nxt, r, term, trunc, _ = env.step(agent.scale_action(a))
+        for k_, v in zip(traj, (obs, a, r, nxt), strict=True):
+            traj[k_].append(v)
+        obs = nxt
+        if term or trunc:
+            break
+    first, _ = env.reset()
+    first_x = x_of(first, agent.initial_state())
+    buf = InteractionBuffer(2, agent.horizon, agent.obs_dim, agent.act_dim)
+    buf.add({k_: np.asarray(v, np.float32) for k_, v in traj.items()}, first)
+    batch = jax.jit(agent._batch)(agent.state, buf.arrays, jnp.asarray(1), jax.random.PRNGKey(0))
+    t = np.asarray(batch["t"])
+    assert len(np.unique(t)) > 5
+    for i, j in np.ndindex(t.shape):
+        np.testing.assert_allclose(batch["x_actor"][i, j], seen[t[i, j]], atol=1e-6)
+        want_next = first_x if t[i, j] == len(seen) - 1 else seen[t[i, j] + 1]
+        np.testing.assert_allclose(batch["x_actor_next"][i, j], want_next, atol=1e-6)
+
+
+def test_policy_action_wants_the_steps_of_an_interaction_in_order():
+    agent = _tiny()
+    obs = np.zeros(agent.obs_dim, np.float32)
+    key = jax.random.PRNGKey(0)
+    agent.policy_action(obs, LatentState(np.zeros(0), 0), key, True)
+    with pytest.raises(ValueError, match="got step t=5 but its history is at t=1"):
+        agent.policy_action(obs, LatentState(np.zeros(0), 5), key, True)
+    with pytest.raises(ValueError, match="SLAC acts on the interaction's history"):
+        agent.predict(obs, LatentState(np.zeros(0), 3))
+
+
+def test_save_load_round_trip_gives_identical_actions(trained, tmp_path):
+    agent = trained
+    path = agent.save(tmp_path / "slac.msgpack")
+    loaded = load_agent(path, gym.make("lili/PointMass-v0"))
+    assert isinstance(loaded, SLAC) and loaded.options == agent.options
+    obs = np.array([0.3, -0.2], np.float32)
+    s1, s2 = None, None
+    for t in range(K + 3):
+        a1, s1 = agent.predict(obs, s1, deterministic=False, key=jax.random.PRNGKey(t))
+        a2, s2 = loaded.predict(obs, s2, deterministic=False, key=jax.random.PRNGKey(t))
+        np.testing.assert_array_equal(a1, a2)
+        obs = obs + 0.1 * a1
+
+
+@pytest.mark.parametrize("bad, match", [
+    ({"extra": {"slac": {"z3_dim": 4}}}, "unknown SLAC option\\(s\\) 'z3_dim'"),
+    ({"extra": {"slac": {"sequence_length": 0}}}, "sequence_length=0 is invalid"),
+    ({"extra": {"slac": {"model_hidden": []}}}, "model_hidden=\\[\\] is invalid"),
+    ({"extra": {"slac": {"lr_model": -1}}}, "lr_model=-1 is invalid"),
+    ({"boundary": "influence"}, "boundary='influence' is invalid for SLAC"),
+])
+def test_bad_options_name_the_value_and_what_is_allowed(bad, match):
+    with pytest.raises(ValueError, match=match):
+        make_agent("slac", gym.make("lili/PointMass-v0"), AgentConfig.from_dict(bad))
+
+
+def test_a_restored_checkpoint_continues_like_the_uninterrupted_run(trained, tmp_path):
+    """Checkpoint, go on, restore the checkpoint, go on again: the same numbers (API level,
+    reusing the compiled agent; the CLI version below runs fresh agents and is slow)."""
+    agent = trained
+    logger = RunLogger(tmp_path, {}, 0, checkpoint_every=1000)
+    logger.checkpoint(agent)
+    logger.close()
+    before = agent.num_interactions
+
+    def numbers(rows):
+        return [{k: v for k, v in r.items() if k not in ("wall_time", "strategy")} for r in rows]
+
+    first = numbers(train(agent, 3))
+    load_checkpoint(tmp_path, agent)
+    assert agent.num_interactions == before
+    again = numbers(train(agent, 3))
+    assert first == again and "rep_loss" in first[-1]
+
+
+def _rows(path):
+    with open(path, newline="") as f:
+        return [{k: v for k, v in r.items() if k != "wall_time"} for r in csv.DictReader(f)]
+
+
+@pytest.mark.slow
+def test_cli_train_and_resume_give_the_numbers_of_an_uninterrupted_run(tmp_path, monkeypatch):
+    """One uninterrupted CLI run; a copy of its folder taken at the checkpoint after
+    interaction 4 (learning and pretraining already under way) is resumed to the end."""
+    cfg = tmp_path / "fast.yaml"
+    cfg.write_text(yaml.safe_dump(FAST))
+    run = tmp_path / "full" / "Driving2D-v0" / "slac" / "seed_0"
+    copy = tmp_path / "cut" / "Driving2D-v0" / "slac" / "seed_0"
+    original_log = RunLogger.log
+
+    def copying_log(self, row, agent):
+        original_log(self, row, agent)
+        if row["interaction"] == 3:  # just checkpointed at 4 interactions
+            shutil.copytree(run, copy)
+
+    def lili_train(out, *extra):
+        return cli.main(["train", "driving-2d", "--algo", "slac", "--interactions", "8",
+                         "--out", str(out), "--config", str(cfg), "--no-progress", *extra])
+
+    monkeypatch.setattr(RunLogger, "log", copying_log)
+    assert lili_train(tmp_path / "full") == 0
+    monkeypatch.setattr(RunLogger, "log", original_log)
+    assert len(_rows(copy / "metrics.csv")) == 4
+    assert lili_train(tmp_path / "cut", "--resume") == 0
+    full = _rows(run / "metrics.csv")
+    assert full[-1]["critic_loss"] != "" and full[-1]["rep_loss"] != ""
+    assert _rows(copy / "metrics.csv") == full
+    assert lili_train(tmp_path / "full") == 2  # an existing run is not overwritten
