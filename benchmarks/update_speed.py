@@ -1,12 +1,13 @@
 """Update cost: this library's agents against Stable-Baselines3's SAC, side by side in one run.
 
     pip install -e '.[bench]'          # stable-baselines3 + torch (optional)
-    python benchmarks/update_speed.py [--updates 500] [--repeats 5]
+    python benchmarks/update_speed.py [--updates 500] [--repeats 5] [--algos sac lili ...]
 
 Both sides do full SAC updates (twin critic, actor, temperature, target update) with the same
 sizes: batch 256, 2x256 networks, on Point Mass transitions. SB3 is timed through
 ``model.train(gradient_steps=N)``; ours through the fused block (``agent.train_block``, one
-``lax.scan`` of N updates with sampling inside). LILI's and the Oracle's updates are timed too.
+``lax.scan`` of N updates with sampling inside). Every agent's update is timed too (Oracle, LILI, LILI
+(no influence), LILAC, SLAC at its default sizes) and shown as a multiple of SAC's.
 The ratio uses the best of ``--repeats`` timings of each, measured alternately in this process.
 Prints a table and writes ``benchmarks/results/update_speed.json``.
 """
@@ -29,6 +30,7 @@ from lili.config import AgentConfig
 from lili.train import train
 
 RESULTS = Path(__file__).resolve().parent / "results"
+AGENTS = ("sac", "oracle", "lili", "lili-no-influence", "lilac", "slac")
 
 
 def ours(algo: str, n_updates: int):
@@ -79,9 +81,10 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--updates", type=int, default=500)
     p.add_argument("--repeats", type=int, default=5)
+    p.add_argument("--algos", nargs="+", default=list(AGENTS), choices=AGENTS)
     args = p.parse_args()
     n = args.updates
-    runners = {algo: ours(algo, n) for algo in ("sac", "oracle", "lili", "lili-no-influence")}
+    runners = {algo: ours(algo, n) for algo in args.algos}
     sb = sb3(n)
     if sb is not None:
         runners["sb3-sac"] = sb[0]
@@ -91,17 +94,18 @@ def main() -> None:
             ms[k].append(best_ms(fn, n, 1))
     best = {k: min(v) for k, v in ms.items()}
     rows = [(k, best[k]) for k in runners]
-    print(f"{'agent':<20}{'ms / update':>12}{'vs SB3 SAC':>12}")
+    print(f"{'agent':<20}{'ms / update':>12}{'x SAC':>8}{'vs SB3 SAC':>12}")
     for k, v in rows:
         ratio = f"{best['sb3-sac'] / v:.2f}x" if "sb3-sac" in best else "n/a"
-        print(f"{k:<20}{v:>12.2f}{ratio:>12}")
+        vs_sac = f"{v / best['sac']:.2f}" if "sac" in best else "n/a"
+        print(f"{k:<20}{v:>12.2f}{vs_sac:>8}{ratio:>12}")
     if sb is None:
         print("(stable-baselines3 not installed: pip install -e '.[bench]' for the comparison)")
     out = {"ms_per_update": best, "all_ms": ms, "updates_per_timing": n,
            "batch": 256, "hidden": [256, 256], "jax": jax.__version__,
            "torch": sb[1] if sb else None, "torch_threads": sb[2] if sb else None,
            "machine": platform.machine(), "cpus": __import__("os").cpu_count()}
-    if "sb3-sac" in best:
+    if "sb3-sac" in best and "sac" in best:
         out["speedup_sac_vs_sb3"] = best["sb3-sac"] / best["sac"]
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / "update_speed.json").write_text(json.dumps(out, indent=1))
