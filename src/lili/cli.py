@@ -182,7 +182,7 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("run", help="run folder")
     e.add_argument("--interactions", type=int, default=100)
     e.add_argument("--seed", type=int, default=12345, help="seed of the env sequence")
-    e.add_argument("--video", help="write the interactions to this .gif or .mp4")
+    e.add_argument("--video", help="write the interactions to this animated .gif")
     e.set_defaults(func=cmd_eval)
 
     r = sub.add_parser("report", help="curves, tables and heatmaps from run folders")
