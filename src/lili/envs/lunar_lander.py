@@ -1,0 +1,237 @@
+"""Lunar Lander (the paper's appendix): land on a launchpad that the other agent moves.
+
+Built on Gymnasium's continuous Lunar Lander (``gymnasium.envs.box2d.lunar_lander.LunarLander``
+with ``continuous=True``), by composition: the env owns one lander (a thin subclass that adds
+the two launchpads and draws the flags at the target) and drives it, so the physics, terrain,
+engines, crash and rest detection are Gymnasium's and a Gymnasium upgrade reaches them.
+
+The partner (the appendix): the launchpad alternates between z = (0.4, 0.2) and z = (-0.4, 0.2)
+at every interaction, whatever the ego does; ``reset(seed)`` draws which one comes first.
+Coordinates are those of the lander's observation (``obs[0], obs[1]``: x in units of half the
+viewport width, 0 at the centre; y in units of half the viewport height, 0 where the lander
+rests on Gymnasium's central helipad).
+
+Reward, as the appendix gives it. Every step that is not the last of the interaction:
+
+    r = -||s_pos - z||^2 - ||s_vel||^2 - |s_theta|
+        - 0.0015 * (clip(a_0, 0, 1) + 1) - 0.0003 * clip(|a_1|, 0.5, 1)
+
+with ``s_pos = obs[0:2]``, ``s_vel = obs[2:4]``, ``s_theta = obs[4]`` (the observation's units)
+and ``a`` the action of that step. The two fuel terms are charged as written, on every step:
+Gymnasium charges them (x100) only while an engine fires (``a_0 > 0``, ``|a_1| > 0.5``), the
+appendix's formula does not make that exception. The last step of an interaction (terminated or
+at the horizon) gets the terminal reward instead of the per-step one: +1 if
+``||s_pos - z|| < 0.1``, otherwise ``-||s_pos - z||``. Replacing (not adding) follows
+Gymnasium's lander, whose terminal rewards (+-100) also replace that step's reward, and the
+appendix calls the last step's reward "the terminal reward". ``info["success"]`` is
+``||s_pos - z|| < 0.1`` at the end.
+
+Choices where the appendix is silent (and why):
+
+- **Launchpads you can land on.** z has y = 0.2, above the stock terrain (the ground near
+  x = +-0.4 is lower than Gymnasium's central helipad, which is at y = 0). To make "land on the
+  launchpad" physically possible, two flat-topped mesas stand at x = +-0.4, their tops at the
+  height where a lander resting on them has y = 0.2, each as wide as the success disc (0.2 in x).
+  Both always exist; only the flags (drawn where Gymnasium draws its helipad flags) show which
+  one is the target, so the physics do not depend on z and the ego cannot feel the target.
+- **Action repeat.** Gymnasium's lander runs at 50 frames per second and lands in about 200
+  frames, too many decisions per interaction for the paper's agents on 2 CPU cores. Each
+  env step holds the action for ``frame_skip`` frames (default 5, i.e. 10 decisions per second)
+  and an interaction lasts at most ``horizon`` steps (default 60, i.e. 6 s of flight). The
+  task is hard at this length: a hand-tuned PD controller that knows z (Gymnasium's heuristic
+  with the target moved) ended within 0.1 of the pad in only 5-20% of 40 interactions, so
+  success is a demanding measure here; the return (distance-shaped) is the smoother one.
+- **End of an interaction.** Gymnasium's rules end it early (``terminated``): the lander's body
+  touches the ground or a mesa (crash), it leaves the screen sideways (|x| >= 1) or it comes to
+  rest. It also ends when any state component leaves Gymnasium's observation box (flown off the
+  top, spun beyond 2 pi); the observation is clipped into the box then. Otherwise it is
+  truncated at the horizon.
+- **Terrain and initial push.** Gymnasium draws them from its lander's ``np_random``. At every
+  interaction the lander is reset with a seed drawn from this env's ``np_random``, so
+  ``reset(seed)`` replays the whole sequence (terrain, push, engine dispersion, pads).
+
+Observation: the lander's own 8-dim state (x, y, vx, vy, angle, angular velocity, two leg
+contacts), never the pad. ``info["strategy"]`` = z (float32, shape (2,)),
+``info["strategy_id"]`` = 0 for the left pad (x = -0.4) and 1 for the right pad (x = +0.4).
+The partner has no options: its rule depends on time only, so the noise and history variants of
+the other envs have no meaning here.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.envs.box2d import lunar_lander as gym_ll
+
+from lili.envs.core import RepeatedInteractionEnv
+
+__all__ = ["LunarLanderEnv", "AlternatingPadPartner", "PadLander", "PADS"]
+
+PADS = np.array([[-0.4, 0.2], [0.4, 0.2]])
+SUCCESS_RADIUS = 0.1
+# The world (Box2D) frame of Gymnasium's lander: width W, height H, and the factors that turn
+# world coordinates into the observation's.
+_W = gym_ll.VIEWPORT_W / gym_ll.SCALE
+_H = gym_ll.VIEWPORT_H / gym_ll.SCALE
+_HALF_W, _HALF_H = _W / 2, _H / 2
+PAD_HALF_WIDTH = SUCCESS_RADIUS * _HALF_W  # the mesa top spans the success disc in x
+
+
+class AlternatingPadPartner:
+    """Picks the launchpad: x = -0.4 and x = +0.4 in turn (y = 0.2), whatever the ego does."""
+
+    strategy_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+
+    def __init__(self) -> None:
+        self.pad = 0
+
+    def reset(self, rng: np.random.Generator) -> None:
+        self.pad = int(rng.integers(0, 2))
+
+    def strategy(self) -> np.ndarray:
+        return PADS[self.pad].astype(np.float32)
+
+    def strategy_id(self) -> int | None:
+        return self.pad
+
+    def update(self, outcome: Any, rng: np.random.Generator) -> None:
+        """Switch pads; ``outcome`` (the lander's final position) does not matter."""
+        self.pad = 1 - self.pad
+
+
+class PadLander(gym_ll.LunarLander):
+    """Gymnasium's continuous lander with two landing mesas and the flags at the target pad.
+
+    ``target`` (0 or 1, an index into :data:`PADS`) only changes where the flags are drawn.
+    """
+
+    def __init__(self, render_mode: str | None = None) -> None:
+        super().__init__(render_mode=render_mode, continuous=True)
+        self.target = 0
+        self.mesas: list[Any] = []
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        out = super().reset(seed=seed, options=options)
+        # Gymnasium's reset builds a fresh Box2D world (the old mesas die with the old one).
+        self.mesas = [self._make_mesa(pad) for pad in PADS]
+        # Drawn first, so that the lander and its flames show in front of them.
+        self.drawlist = self.mesas + [self.lander] + self.legs
+        return out
+
+    def _make_mesa(self, pad: np.ndarray) -> Any:
+        x, top = self.pad_world(pad)
+        body = self.world.CreateStaticBody(
+            shapes=gym_ll.polygonShape(vertices=[
+                (x - PAD_HALF_WIDTH, 0.0), (x + PAD_HALF_WIDTH, 0.0),
+                (x + PAD_HALF_WIDTH, top), (x - PAD_HALF_WIDTH, top)]),
+        )
+        body.fixtures[0].friction = 0.1  # the terrain's friction
+        body.color1 = body.color2 = (255, 255, 255)  # the terrain's colour
+        return body
+
+    def pad_world(self, pad: np.ndarray) -> tuple[float, float]:
+        """World x of a pad's centre and the height of its mesa's top.
+
+        The lander rests on flat ground at height ``helipad_y`` with observation y = 0, so a top
+        at ``helipad_y + y * H / 2`` lets it rest at observation y = ``y``.
+        """
+        return _HALF_W + float(pad[0]) * _HALF_W, self.helipad_y + float(pad[1]) * _HALF_H
+
+    def render(self):
+        # Gymnasium draws its flags at helipad_x1/x2 and height helipad_y; point them at the
+        # target mesa for the duration of the call (step() reads helipad_y for the observation).
+        saved = self.helipad_x1, self.helipad_x2, self.helipad_y
+        x, top = self.pad_world(PADS[self.target])
+        self.helipad_x1, self.helipad_x2, self.helipad_y = (
+            x - PAD_HALF_WIDTH, x + PAD_HALF_WIDTH, top)
+        try:
+            return super().render()
+        finally:
+            self.helipad_x1, self.helipad_x2, self.helipad_y = saved
+
+
+class LunarLanderEnv(RepeatedInteractionEnv):
+    """``lili/LunarLander-v0``: land on the launchpad the partner picks (see the module docs).
+
+    Args:
+        frame_skip: Gymnasium frames (1/50 s each) per env step; the action is held for all of
+            them. An integer >= 1.
+        horizon: the most env steps in one interaction. An integer >= 1.
+        render_mode: ``"rgb_array"`` or None.
+    """
+
+    def __init__(
+        self, frame_skip: int = 5, horizon: int = 60, render_mode: str | None = None
+    ) -> None:
+        super().__init__(render_mode)
+        for name, value in (("frame_skip", frame_skip), ("horizon", horizon)):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+                raise ValueError(f"{name}={value!r} is invalid; allowed: an integer >= 1")
+        self.frame_skip = int(frame_skip)
+        self.horizon = int(horizon)
+        self.metadata = dict(self.metadata, render_fps=max(1, round(gym_ll.FPS / frame_skip)))
+        self.partner = AlternatingPadPartner()
+        self.lander = PadLander(render_mode=render_mode)
+        self.observation_space = self.lander.observation_space
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+        self._state = np.zeros(8, dtype=np.float32)
+        self._pad = PADS[0]
+
+    def _begin(self) -> np.ndarray:
+        self._pad = PADS[self.partner.pad]
+        self.lander.target = self.partner.pad
+        obs, _ = self.lander.reset(seed=int(self.np_random.integers(2**31)))
+        self._state = np.clip(obs, self.observation_space.low, self.observation_space.high)
+        return self._state.copy()
+
+    def _step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool]:
+        action = np.clip(action, -1.0, 1.0)
+        terminated = False
+        for _ in range(self.frame_skip):
+            obs, _, terminated, _, _ = self.lander.step(action)
+            if terminated:
+                break
+        inside = self.observation_space.contains(obs)
+        self._state = np.clip(obs, self.observation_space.low, self.observation_space.high)
+        terminated = terminated or not inside
+        if terminated or self.t + 1 >= self.horizon:
+            reward = self.terminal_reward(self._state, self._pad)
+        else:
+            reward = self.step_reward(self._state, action, self._pad)
+        return self._state.copy(), reward, terminated
+
+    @staticmethod
+    def step_reward(state: np.ndarray, action: np.ndarray, pad: np.ndarray) -> float:
+        """The appendix's per-step reward (see the module docstring)."""
+        s = np.asarray(state, dtype=np.float64)
+        a = np.asarray(action, dtype=np.float64)
+        return float(
+            -np.sum((s[0:2] - pad) ** 2) - np.sum(s[2:4] ** 2) - abs(s[4])
+            - 0.0015 * (np.clip(a[0], 0.0, 1.0) + 1.0)
+            - 0.0003 * np.clip(abs(a[1]), 0.5, 1.0)
+        )
+
+    @staticmethod
+    def terminal_reward(state: np.ndarray, pad: np.ndarray) -> float:
+        """The appendix's terminal reward: +1 within 0.1 of the pad, else minus the distance."""
+        dist = float(np.linalg.norm(np.asarray(state[0:2], dtype=np.float64) - pad))
+        return 1.0 if dist < SUCCESS_RADIUS else -dist
+
+    def _outcome(self) -> np.ndarray:
+        return self._state[0:2].copy()
+
+    def _success(self) -> bool:
+        dist = np.linalg.norm(self._state[0:2].astype(np.float64) - self._pad)
+        return bool(dist < SUCCESS_RADIUS)
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode != "rgb_array":
+            return None
+        return self.lander.render()
+
+    def close(self) -> None:
+        self.lander.close()
+        super().close()
+

@@ -1,0 +1,101 @@
+"""Lunar Lander with a moving launchpad: the partner's rule, the rewards, determinism, rendering."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env as gym_check_env
+
+import lili.envs  # noqa: F401
+from lili.envs.checker import check_env
+from lili.envs.lunar_lander import PADS, SUCCESS_RADIUS, LunarLanderEnv
+
+
+def _play(env: LunarLanderEnv, n: int, action=(0.0, 0.0)) -> list[dict]:
+    """Play ``n`` interactions with a constant action; one record per interaction."""
+    out = []
+    for _ in range(n):
+        obs, info = env.reset() if env.interaction >= 0 else env.reset(seed=0)
+        steps, ret, done = 0, 0.0, False
+        while not done:
+            obs, r, term, trunc, last = env.step(np.asarray(action, np.float32))
+            steps, ret, done = steps + 1, ret + r, term or trunc
+        out.append({"pad": info["strategy"].copy(), "sid": info["strategy_id"], "steps": steps,
+                    "ret": ret, "final": obs.copy(), "success": last["success"], "r_last": r})
+    return out
+
+
+def test_pad_alternates_whatever_the_ego_does() -> None:
+    for action in ((0.0, 0.0), (1.0, -1.0)):
+        recs = _play(LunarLanderEnv(), 5, action)
+        sids = [r["sid"] for r in recs]
+        assert all(a != b for a, b in zip(sids, sids[1:], strict=False))
+        for r in recs:
+            np.testing.assert_allclose(r["pad"], PADS[r["sid"]])
+            assert abs(r["pad"][0]) == pytest.approx(0.4) and r["pad"][1] == pytest.approx(0.2)
+
+
+def test_first_pad_comes_from_the_seed() -> None:
+    env = LunarLanderEnv()
+    firsts = {env.reset(seed=s)[1]["strategy_id"] for s in range(12)}
+    assert firsts == {0, 1}
+
+
+def test_terminal_reward_and_success() -> None:
+    pad = PADS[1]
+    inside = np.array([pad[0] + 0.05, pad[1], 0, 0, 0, 0, 1, 1], np.float32)
+    outside = np.array([pad[0] + 0.3, pad[1] - 0.4, 0, 0, 0, 0, 0, 0], np.float32)
+    assert LunarLanderEnv.terminal_reward(inside, pad) == 1.0
+    assert LunarLanderEnv.terminal_reward(outside, pad) == pytest.approx(-0.5)
+    # The per-step reward: position, velocity and angle costs plus both fuel terms.
+    s = np.array([0.4, 0.2, 0.0, 0.0, 0.0, 0, 0, 0], np.float32)
+    assert LunarLanderEnv.step_reward(s, np.zeros(2), pad) == pytest.approx(-0.0015 - 0.00015)
+    # End to end: the last step's reward is the terminal reward of the final position.
+    for r in _play(LunarLanderEnv(), 2):
+        d = float(np.linalg.norm(r["final"][:2] - r["pad"]))
+        assert r["success"] == (d < SUCCESS_RADIUS)
+        assert r["r_last"] == pytest.approx(1.0 if d < SUCCESS_RADIUS else -d, abs=1e-5)
+
+
+def test_falling_lander_ends_early() -> None:
+    recs = _play(LunarLanderEnv(horizon=60), 2)  # engines off: it falls and lands or crashes
+    assert all(r["steps"] < 60 for r in recs)
+
+
+def test_reset_seed_replays_the_sequence() -> None:
+    a = _play(LunarLanderEnv(), 3, (0.3, 0.2))
+    b = _play(LunarLanderEnv(), 3, (0.3, 0.2))
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_array_equal(x["final"], y["final"])
+        assert x["ret"] == y["ret"] and x["sid"] == y["sid"]
+
+
+def test_checkers_pass() -> None:
+    gym_check_env(LunarLanderEnv(), skip_render_check=True)
+    check_env(gym.make("lili/LunarLander-v0"))
+
+
+def test_render_draws_the_target_pad() -> None:
+    env = LunarLanderEnv(render_mode="rgb_array")
+    env.reset(seed=0)
+    frames = {}
+    for pad in (0, 1):  # the same physical state, only the partner's pad differs
+        env.lander.target = pad
+        frames[pad] = env.render().astype(int)
+    assert frames[0].shape == (400, 600, 3)
+    diff = np.abs(frames[0] - frames[1]).sum(-1).sum(0)  # per image column
+    # Pads centred at x = -0.4 and +0.4 of the half width (image columns 180 and 420 of 600),
+    # 60 columns wide; each flag's cloth reaches 25 columns right of its pole.
+    assert diff[150:236].sum() > 0 and diff[390:476].sum() > 0
+    assert diff[:150].sum() == diff[236:390].sum() == diff[476:].sum() == 0
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"frame_skip": 0}, "frame_skip=0"),
+    ({"horizon": 2.5}, "horizon=2.5"),
+    ({"render_mode": "human"}, "render_mode='human'"),
+])
+def test_bad_kwargs(kwargs, match) -> None:
+    with pytest.raises(ValueError, match=match):
+        LunarLanderEnv(**kwargs)
