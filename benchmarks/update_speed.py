@@ -6,8 +6,8 @@
 Both sides do full SAC updates (twin critic, actor, temperature, target update) with the same
 sizes: batch 256, 2x256 networks, on Point Mass transitions. SB3 is timed through
 ``model.train(gradient_steps=N)``; ours through the fused block (``agent.train_block``, one
-``lax.scan`` of N updates with sampling inside). Every agent's update is timed too (Oracle, LILI, LILI
-(no influence), LILAC, SLAC at its default sizes) and shown as a multiple of SAC's.
+``lax.scan`` of N updates with sampling inside). Every agent's update is timed too (Oracle,
+LILI, LILI (no influence), LILAC, SLAC at its default sizes) and shown as a multiple of SAC's.
 The ratio uses the best of ``--repeats`` timings of each, measured alternately in this process.
 Prints a table and writes ``benchmarks/results/update_speed.json``.
 """

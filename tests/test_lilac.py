@@ -1,20 +1,16 @@
 """LILAC: posterior and prior, the ELBO, acting with the prior, save/load, train and resume."""
 
-import csv
 
 import gymnasium as gym
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-import yaml
 
 import lili.envs  # noqa: F401  (registers the envs)
-from lili import cli
 from lili.agents import ALGOS, LILAC, load_agent, make_agent
 from lili.buffer import sample
 from lili.config import AgentConfig
-from lili.runs import RunLogger
 
 N = 2
 SMALL = AgentConfig(hidden=(32, 32), enc_hidden=(16, 16), latent_dim=3, warmup_interactions=3,
@@ -219,41 +215,3 @@ def test_bad_options_are_named(extra, match):
     with pytest.raises(ValueError, match=match):
         LILAC(gym.make("lili/PointMass-v0"), SMALL.replace(extra=extra))
 
-
-FAST = {"hidden": [32, 32], "enc_hidden": [16, 16], "latent_dim": 3, "warmup_interactions": 3,
-        "checkpoint_every": 4, "batch_interactions": 8, "per_interaction": 4,
-        "extra": {"lilac": {"prior_window": 2}}}
-
-
-def _rows(path):
-    with open(path, newline="") as f:
-        return [{k: v for k, v in r.items() if k != "wall_time"} for r in csv.DictReader(f)]
-
-
-@pytest.mark.slow  # three runs, each compiling its update block: ~65 s of CPU
-def test_train_and_resume_give_the_same_numbers(tmp_path, monkeypatch):
-    """Through the CLI, as tests/test_train.py does for LILI: killed after interaction 6 (the
-    checkpoint is at 4), resumed, the metrics equal an uninterrupted run's."""
-    cfg_file = tmp_path / "fast.yaml"
-    cfg_file.write_text(yaml.safe_dump(FAST))
-
-    def run(out, extra=()):
-        return cli.main(["train", "point-mass", "--algo", "lilac", "--interactions", "10",
-                         "--out", str(out), "--config", str(cfg_file), "--no-progress", *extra])
-
-    assert run(tmp_path / "full") == 0
-    original_log = RunLogger.log
-
-    def dying_log(self, row, agent):
-        original_log(self, row, agent)
-        if row["interaction"] == 6:  # killed two interactions after the checkpoint at 4
-            raise KeyboardInterrupt
-
-    monkeypatch.setattr(RunLogger, "log", dying_log)
-    assert run(tmp_path / "cut") == 130
-    monkeypatch.setattr(RunLogger, "log", original_log)
-    assert run(tmp_path / "cut", ["--resume"]) == 0
-    full = _rows(tmp_path / "full" / "PointMass-v0" / "lilac" / "seed_0" / "metrics.csv")
-    cut = _rows(tmp_path / "cut" / "PointMass-v0" / "lilac" / "seed_0" / "metrics.csv")
-    assert cut == full and len(full) == 10
-    assert full[-1]["rep_loss"] != "" and np.isfinite(float(full[-1]["rep_loss"]))

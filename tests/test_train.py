@@ -54,7 +54,11 @@ def test_run_folder_contents(tmp_path, cfg_file):
     assert (run / "checkpoints" / "latest.json").exists()
 
 
-@pytest.mark.parametrize("algo", ["lili", "oracle"])
+@pytest.mark.parametrize("algo", [
+    "lili", "oracle",
+    # LILAC's three compiles cost ~65 s of CPU: run with -m slow.
+    pytest.param("lilac", marks=pytest.mark.slow),
+])
 def test_resume_gives_the_same_numbers(tmp_path, cfg_file, monkeypatch, algo):
     assert _train(tmp_path / "full", cfg_file, algo, n=10) == 0
     original_log = RunLogger.log
