@@ -15,7 +15,7 @@ from typing import Any
 
 import yaml
 
-__all__ = ["AgentConfig", "load_config", "BOUNDARY_MODES"]
+__all__ = ["AgentConfig", "load_config", "BOUNDARY_MODES", "extra_options"]
 
 BOUNDARY_MODES = ("bootstrap", "influence", "cut", "same_z")
 
@@ -167,6 +167,24 @@ class AgentConfig:
 
     def replace(self, **changes: Any) -> AgentConfig:
         return dataclasses.replace(self, **changes)
+
+
+def extra_options(config: AgentConfig, key: str, defaults: dict[str, Any],
+                  label: str) -> dict[str, Any]:
+    """An agent's own options: ``config.extra[key]`` over ``defaults``, keys checked.
+
+    Raises ValueError naming the bad value when ``extra[key]`` is not a mapping or has keys that
+    ``defaults`` lacks; checking each value is the agent's job.
+    """
+    raw = config.extra.get(key, {})
+    if not isinstance(raw, dict):
+        raise ValueError(f"config extra.{key}={raw!r} is invalid; allowed: a mapping of "
+                         f"{', '.join(defaults)}")
+    unknown = sorted(set(raw) - set(defaults))
+    if unknown:
+        raise ValueError(f"unknown {label} option(s) {', '.join(map(repr, unknown))} in config "
+                         f"extra.{key}; allowed: {', '.join(defaults)}")
+    return {**defaults, **raw}
 
 
 def load_config(path: str | Path) -> AgentConfig:

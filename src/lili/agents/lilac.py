@@ -74,7 +74,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from lili.agents.sac import SAC, LatentState, Params, sg
-from lili.config import AgentConfig
+from lili.config import AgentConfig, extra_options
 from lili.nets import LOG_STD_MAX, LOG_STD_MIN, Decoder, Encoder
 
 __all__ = ["LILAC", "LatentPrior", "LILAC_OPTIONS", "gaussian_kl"]
@@ -126,15 +126,7 @@ class LatentPrior(nn.Module):
 
 
 def _options(config: AgentConfig) -> dict[str, Any]:
-    raw = config.extra.get("lilac", {})
-    if not isinstance(raw, dict):
-        raise ValueError(f"config extra.lilac={raw!r} is invalid; allowed: a mapping of "
-                         f"{', '.join(LILAC_OPTIONS)}")
-    unknown = sorted(set(raw) - set(LILAC_OPTIONS))
-    if unknown:
-        raise ValueError(f"unknown LILAC option(s) {', '.join(map(repr, unknown))} in config "
-                         f"extra.lilac; allowed: {', '.join(LILAC_OPTIONS)}")
-    opts = {**LILAC_OPTIONS, **raw}
+    opts = extra_options(config, "lilac", LILAC_OPTIONS, "LILAC")
     n = opts["prior_window"]
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"config extra.lilac.prior_window={n!r} is invalid; allowed: an "

@@ -81,7 +81,7 @@ import optax
 
 from lili.agents.sac import SAC, LatentState, Params, sg
 from lili.buffer import sample
-from lili.config import AgentConfig
+from lili.config import AgentConfig, extra_options
 from lili.nets import tanh_gaussian
 
 __all__ = ["SLAC", "SLACState", "LatentModel", "SLAC_OPTIONS", "sample_sequences",
@@ -120,15 +120,7 @@ _LEAK = 0.2  # TensorFlow's leaky_relu default, which the official networks use.
 
 
 def _options(config: AgentConfig) -> dict[str, Any]:
-    raw = config.extra.get("slac", {})
-    if not isinstance(raw, dict):
-        raise ValueError(f"config extra.slac={raw!r} is invalid; allowed: a mapping of "
-                         f"{', '.join(SLAC_OPTIONS)}")
-    unknown = sorted(set(raw) - set(SLAC_OPTIONS))
-    if unknown:
-        raise ValueError(f"unknown SLAC option(s) {', '.join(map(repr, unknown))} in config "
-                         f"extra.slac; allowed: {', '.join(SLAC_OPTIONS)}")
-    opts = {**SLAC_OPTIONS, **raw}
+    opts = extra_options(config, "slac", SLAC_OPTIONS, "SLAC")
 
     def integer(name: str, low: int) -> int:
         v = opts[name]
