@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -149,3 +151,122 @@ def test_checkers_and_render() -> None:
 def test_bad_kwargs(kwargs, match) -> None:
     with pytest.raises(ValueError, match=match):
         AirHockeyEnv(**kwargs)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"aim_noise": float("nan")}, "aim_noise=nan"),
+    ({"aim_noise": True}, "aim_noise=True"),
+    ({"aim_noise": "0.1"}, "aim_noise='0.1'"),
+])
+def test_more_bad_kwargs(kwargs, match) -> None:
+    with pytest.raises(ValueError, match=match):
+        AirHockeyEnv(**kwargs)
+
+
+def _rates(policy, n: int, seed: int) -> tuple[float, np.ndarray]:
+    """Block rate and mode frequencies over ``n`` interactions of ``policy(obs, mode)``."""
+    env = AirHockeyEnv()
+    _, info = env.reset(seed=seed)
+    blocks, modes = 0, []
+    for i in range(n):
+        if i:
+            _, info = env.reset()
+        mode = info["strategy_id"]
+        modes.append(mode)
+        obs = np.array([env.paddle_x], np.float32)
+        while True:
+            obs, _, term, trunc, step_info = env.step(policy(obs, mode))
+            if term or trunc:
+                break
+        blocks += step_info["success"]
+    return blocks / n, np.bincount(modes, minlength=3) / n
+
+
+def test_a_policy_that_knows_the_mode_blocks_and_a_still_paddle_blocks_about_a_third() -> None:
+    def knows(obs, mode):  # a P-controller to the mode's arrival point, from the observation
+        return np.array([np.clip((TARGET_X[mode] - obs[0]) / 0.04, -1, 1)], np.float32)
+
+    rate, _ = _rates(knows, 150, seed=1)
+    assert rate >= 0.9
+    rate, freq = _rates(lambda obs, mode: np.zeros(1, np.float32), 150, seed=1)
+    # A still paddle blocks only middle shots; the table then sends the striker
+    # middle -> left/right, left -> middle, right -> left, so middle is 2/5 of the shots.
+    assert 0.25 <= rate <= 0.5
+    assert rate == pytest.approx(freq[MIDDLE], abs=0.02)
+
+
+def test_noisy_shots_land_in_disjoint_regions_and_noise_replays() -> None:
+    env = AirHockeyEnv()  # default aim noise
+    arrivals = {LEFT: [], MIDDLE: [], RIGHT: []}
+    for mode in (LEFT, MIDDLE, RIGHT):
+        for _ in range(8):
+            away = 0.45 if mode != RIGHT else -0.45
+            arrivals[mode].append(_shot(env, mode, _go_to(away))["puck"][0])
+    for mode, xs in arrivals.items():
+        xs = np.array(xs)
+        assert xs.std() > 0.005  # the noise is there
+        # Within half the 0.3 m spacing of the targets: the three regions cannot overlap.
+        assert np.all(np.abs(xs - TARGET_X[mode]) < 0.15), (mode, xs)
+
+    def offsets(seed: int) -> list[float]:
+        e = AirHockeyEnv(aim_noise=0.05)
+        e.reset(seed=seed)
+        out = [e.partner.aim_offset]
+        for _ in range(3):
+            while True:
+                *_, term, trunc, _ = e.step(np.zeros(1, np.float32))
+                if term or trunc:
+                    break
+            e.reset()
+            out.append(e.partner.aim_offset)
+        return out
+
+    first = offsets(7)
+    assert first == offsets(7) and len(set(first)) == len(first)
+    assert first != offsets(8)
+
+
+def test_bank_shots_stay_inside_the_walls_at_every_mujoco_step() -> None:
+    import mujoco
+
+    env = AirHockeyEnv(aim_noise=0.0)
+    env.reset(seed=0)
+    for mode, side in ((LEFT, -1.0), (RIGHT, 1.0)):
+        env.partner.mode = mode
+        env.reset()
+        env.data.ctrl[env._striker_act] = 0.0
+        xs, vxs = [], []
+        while env.puck[1] > EGO_Y:
+            mujoco.mj_step(env.model, env.data)
+            xs.append(env.puck[0])
+            vxs.append(env.data.qvel[env._puck_q[0]])
+        xs, vxs = np.array(xs), np.array(vxs)
+        # Soft contacts let the puck sink a few millimetres into the wall, never through it.
+        assert np.max(side * xs) <= HALF_WIDTH - PUCK_RADIUS + 0.006
+        assert side * vxs[5] > 0 and side * vxs[-1] < 0  # toward the wall, then back
+
+
+def test_a_blocked_interaction_ends_at_the_touch() -> None:
+    env = AirHockeyEnv(aim_noise=0.0)
+    rec = _shot(env, RIGHT, _go_to(TARGET_X[RIGHT]))
+    assert rec["success"] and rec["term"]
+    gap = np.hypot(rec["puck"][0] - rec["paddle"], rec["puck"][1] - EGO_Y)
+    assert gap <= 0.09 + 1e-3  # puck and paddle radii: in contact, not after the rebound
+    assert rec["puck"][1] > EGO_Y  # stopped before the line
+
+
+def test_registration_spaces_and_render_modes() -> None:
+    from lili.envs import resolve_env_id
+
+    assert resolve_env_id("air-hockey") == "lili/AirHockey-v0"
+    env = gym.make("lili/AirHockey-v0")
+    obs, info = env.reset(seed=0)
+    assert obs.shape == (2,) and obs.dtype == np.float32
+    assert info["strategy"].dtype == np.float32 and info["strategy"].sum() == 1.0
+    assert info["strategy"][info["strategy_id"]] == 1.0
+    assert env.unwrapped.render() is None  # no render_mode
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rendering = gym.make("lili/AirHockey-v0", render_mode="rgb_array")
+        gym_check_env(rendering.unwrapped)  # with the render checks this time
+    rendering.close()

@@ -37,10 +37,13 @@ Choices where the appendix is silent (and why):
 - **Action repeat.** Gymnasium's lander runs at 50 frames per second and lands in about 200
   frames, too many decisions per interaction for the paper's agents on 2 CPU cores. Each
   env step holds the action for ``frame_skip`` frames (default 5, i.e. 10 decisions per second)
-  and an interaction lasts at most ``horizon`` steps (default 60, i.e. 6 s of flight). The
-  task is hard at this length: a hand-tuned PD controller that knows z (Gymnasium's heuristic
-  with the target moved) ended within 0.1 of the pad in only 5-20% of 40 interactions, so
-  success is a demanding measure here; the return (distance-shaped) is the smoother one.
+  and an interaction lasts at most ``horizon`` steps (default 60, i.e. 6 s of flight). That is
+  long enough: :func:`pad_controller`, a scripted PD controller that knows z (Gymnasium's
+  heuristic with the target moved and retuned for 10 Hz), ends within 0.1 of the pad in 89% of
+  interactions (400 interactions over seeds 0-3, 78-94% per pad and seed), after 38 steps on
+  average. Most of those end by Gymnasium's crash rule (the body touches the mesa as the lander
+  sets down still drifting or tilted; 12% come to rest), which the appendix's position-only
+  success counts as reaching the pad.
 - **End of an interaction.** Gymnasium's rules end it early (``terminated``): the lander's body
   touches the ground or a mesa (crash), it leaves the screen sideways (|x| >= 1) or it comes to
   rest. It also ends when any state component leaves Gymnasium's observation box (flown off the
@@ -67,7 +70,7 @@ from gymnasium.envs.box2d import lunar_lander as gym_ll
 
 from lili.envs.core import RepeatedInteractionEnv
 
-__all__ = ["LunarLanderEnv", "AlternatingPadPartner", "PadLander", "PADS"]
+__all__ = ["LunarLanderEnv", "AlternatingPadPartner", "PadLander", "PADS", "pad_controller"]
 
 PADS = np.array([[-0.4, 0.2], [0.4, 0.2]])
 SUCCESS_RADIUS = 0.1
@@ -235,3 +238,22 @@ class LunarLanderEnv(RepeatedInteractionEnv):
         self.lander.close()
         super().close()
 
+
+def pad_controller(obs: np.ndarray, pad: np.ndarray) -> np.ndarray:
+    """A scripted controller that knows the pad: Gymnasium's heuristic lander, retargeted.
+
+    It tilts towards the pad (PD on x and vx), holds a height that falls linearly to the pad's
+    as it closes in (1.5 per unit of x-distance, so it stays clear of the mesa's edge until it
+    is above the top) and, once a leg touches, only brakes its fall. The gains were tuned for
+    the default 10 decisions per second. It is the reference that shows the task is solvable
+    within the default horizon (see the module docstring); no agent uses it.
+    """
+    s = np.asarray(obs, dtype=np.float64)
+    dx = s[0] - float(pad[0])
+    angle_target = np.clip(dx + s[2], -0.4, 0.4)
+    height_target = float(pad[1]) + 1.5 * abs(dx)
+    angle_todo = (angle_target - s[4]) * 0.5 - s[5]
+    height_todo = (height_target - s[1]) * 0.5 - 0.3 * s[3]
+    if s[6] or s[7]:
+        angle_todo, height_todo = 0.0, -0.5 * s[3]
+    return np.clip([height_todo * 20 - 1, -angle_todo * 20], -1, 1).astype(np.float32)
