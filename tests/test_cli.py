@@ -26,6 +26,7 @@ def _err(capsys, argv):
     (["check-env", "nosuchmodule:Env"], "nosuchmodule"),
     (["eval", "/nonexistent"], "not a run folder"),
     (["report", "/nonexistent"], "/nonexistent"),
+    (["report", "/nonexistent", "--upto", "0"], "--upto 0 is invalid"),
 ])
 def test_bad_input_exits_2_with_one_message(capsys, tmp_path, argv, match):
     argv = [*argv, "--out", str(tmp_path)] if argv[0] in ("train",) else argv

@@ -58,15 +58,51 @@ def test_terminal_reward_and_success() -> None:
         assert r["r_last"] == pytest.approx(1.0 if d < SUCCESS_RADIUS else -d, abs=1e-5)
 
 
-def test_falling_lander_ends_early() -> None:
-    recs = _play(LunarLanderEnv(horizon=60), 2)  # engines off: it falls and lands or crashes
-    assert all(r["steps"] < 60 for r in recs)
+def test_interactions_run_to_the_horizon_unless_end_on_contact() -> None:
+    # Engines off: it falls and lands or crashes well before step 60.
+    assert all(r["steps"] < 60 for r in _play(LunarLanderEnv(end_on_contact=True), 2))
+    # By default it lies where it fell until the horizon.
+    assert all(r["steps"] == 60 for r in _play(LunarLanderEnv(), 2))
+    # Flying off (full thrust spins it away) ends it at the same step either way.
+    for action in ((1.0, 1.0), (0.5, -1.0)):
+        (a,) = _play(LunarLanderEnv(), 1, action)
+        (b,) = _play(LunarLanderEnv(end_on_contact=True), 1, action)
+        assert a["steps"] == b["steps"] < 30
+
+
+def _controller_returns(end_on_contact: bool, target, n: int = 8) -> float:
+    env = LunarLanderEnv(end_on_contact=end_on_contact)
+    obs, info = env.reset(seed=0)
+    total = 0.0
+    for _ in range(n):
+        pad, done = info["strategy"], False
+        while not done:
+            obs, r, term, trunc, _ = env.step(target(obs, pad))
+            total, done = total + r, term or trunc
+        obs, info = env.reset()
+    return total / n
+
+
+def test_by_default_the_return_ranks_landing_on_the_pad_first() -> None:
+    # Why interactions run to the horizon by default: with end_on_contact=True, dropping with
+    # the engines off ends the per-step cost early and returns more than landing on the pad.
+    def engines_off(obs, pad):
+        return np.array([-1.0, 0.0], np.float32)
+
+    def wrong_pad(obs, pad):
+        return pad_controller(obs, np.array([-pad[0], pad[1]]))
+
+    assert _controller_returns(True, engines_off) > _controller_returns(True, pad_controller)
+    right = _controller_returns(False, pad_controller)
+    assert right > _controller_returns(False, engines_off) + 10
+    assert right > _controller_returns(False, wrong_pad) + 10
 
 
 def test_a_controller_that_knows_the_pad_reaches_both_pads() -> None:
     # The task is solvable within the default horizon: a scripted controller that is told z
-    # ends within 0.1 of it most of the time on each pad (about 89% over 400 interactions).
-    env = LunarLanderEnv()
+    # touches down within 0.1 of it most of the time on each pad (about 89% over 400
+    # interactions; it ends at touchdown here, with the default it may bounce off afterwards).
+    env = LunarLanderEnv(end_on_contact=True)
     obs, info = env.reset(seed=0)
     hits: dict[int, list[bool]] = {0: [], 1: []}
     for _ in range(30):
@@ -80,6 +116,7 @@ def test_a_controller_that_knows_the_pad_reaches_both_pads() -> None:
         assert len(hits[sid]) == 15
         assert np.mean(hits[sid]) >= 0.7, (sid, hits[sid])
     # Flying to the other pad fails: success is about this interaction's pad, not any pad.
+    env = LunarLanderEnv()
     obs, info = env.reset(seed=0)
     done = False
     while not done:
@@ -119,6 +156,7 @@ def test_render_draws_the_target_pad() -> None:
 @pytest.mark.parametrize("kwargs, match", [
     ({"frame_skip": 0}, "frame_skip=0"),
     ({"horizon": 2.5}, "horizon=2.5"),
+    ({"end_on_contact": "yes"}, "end_on_contact='yes'"),
     ({"render_mode": "human"}, "render_mode='human'"),
 ])
 def test_bad_kwargs(kwargs, match) -> None:

@@ -350,3 +350,27 @@ def test_paper_reference_matches_aliases() -> None:
     assert report.paper_reference("CartPole-v1") is None
     assert report.algo_color("lili") != report.algo_color("sac")
     assert report.algo_color("new-algo") == report.algo_color("new-algo")
+
+
+def test_upto_compares_runs_at_one_budget(tmp_path: Path) -> None:
+    # A 200-interaction run and a 100-interaction run: at upto=100 the long run's final window
+    # is its interactions 90-99 (EARLY return), not its last 20.
+    _write_run(tmp_path, PM, "lili", 0, n=200)
+    _write_run(tmp_path, PM, "lili", 1, n=100)
+    runs = find_runs([tmp_path], upto=100)
+    assert [r.n_interactions for r in runs] == [100, 100]
+    assert [r.budget for r in runs] == [100, 100]
+    (row,) = summarize(runs)
+    assert row["returns"] == [EARLY, FINAL_RETURN[PM]["lili"][1]]
+    result = write_report([tmp_path], tmp_path / "out", upto=100)
+    assert "| LILI | 2 |" in result["markdown"]
+    assert "last 10% of the first 100 interactions" in result["markdown"]
+    # Without upto the long run is judged on its own last 10%.
+    (full,) = summarize(find_runs([tmp_path]))
+    assert full["returns"] == [FINAL_RETURN[PM]["lili"][0], FINAL_RETURN[PM]["lili"][1]]
+
+
+@pytest.mark.parametrize("upto", [0, -5, 2.5, True])
+def test_bad_upto_raises(runs_dir: Path, upto) -> None:
+    with pytest.raises(ValueError, match="upto must be a positive number"):
+        find_runs([runs_dir], upto=upto)

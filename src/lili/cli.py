@@ -143,8 +143,10 @@ def cmd_eval(args: argparse.Namespace) -> int:
 def cmd_report(args: argparse.Namespace) -> int:
     from lili.report import markdown_table, write_report
 
+    if args.upto is not None and args.upto < 1:
+        raise UsageError(f"--upto {args.upto} is invalid; allowed: an integer >= 1")
     out = Path(args.out) if args.out else Path(args.runs[0]) / "report"
-    summary = write_report(args.runs, out)
+    summary = write_report(args.runs, out, upto=args.upto)
     print(markdown_table(summary))
     print(f"figures and tables in {out}")
     return 0
@@ -188,6 +190,8 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("report", help="curves, tables and heatmaps from run folders")
     r.add_argument("runs", nargs="+", help="run folders or folders containing them")
     r.add_argument("--out", help="output folder (default RUN/report)")
+    r.add_argument("--upto", type=int, metavar="N",
+                   help="compare at one budget: use only each run's first N interactions")
     r.set_defaults(func=cmd_report)
 
     c = sub.add_parser("check-env", help="check an env against the repeated-interaction contract")

@@ -190,6 +190,20 @@ class Run:
             return None
         return np.stack([self.metrics[name] for _, name in cols], axis=1)
 
+    def truncated(self, upto: int) -> Run:
+        """This run as it stood after its first ``upto`` interactions.
+
+        Training does not depend on the budget, so these are the numbers a run with budget
+        ``upto`` would have logged; this is how runs of different lengths are compared at one
+        budget. The budget in the copy's config is capped at ``upto``.
+        """
+        config = dict(self.config)
+        if self.budget is not None:
+            config["interactions"] = min(self.budget, upto)
+        metrics = {name: col[:upto].copy() for name, col in self.metrics.items()}
+        return Run(path=self.path, env=self.env, algo=self.algo, seed=self.seed, config=config,
+                   metrics=metrics)
+
 
 def _parse_cell(text: str, path: Path, line: int, column: str) -> float:
     text = text.strip()
@@ -293,8 +307,10 @@ def _is_run_dir(folder: Path) -> bool:
     return (folder / METRICS_FILE).is_file() and (folder / CONFIG_FILE).is_file()
 
 
-def find_runs(paths: Sequence[str | Path]) -> list[Run]:
+def find_runs(paths: Sequence[str | Path], upto: int | None = None) -> list[Run]:
     """Find and load every run folder at or below each of ``paths``.
+
+    With ``upto``, every run is cut to its first ``upto`` interactions (:meth:`Run.truncated`).
 
     A path may be a run folder, any parent of run folders, or a run's ``metrics.csv`` /
     ``config.yaml``. Runs are returned sorted by (env, algo, seed, path); a folder reached from
@@ -306,6 +322,8 @@ def find_runs(paths: Sequence[str | Path]) -> list[Run]:
     """
     if isinstance(paths, (str, Path)):
         paths = [paths]
+    if upto is not None and (isinstance(upto, bool) or not isinstance(upto, int) or upto < 1):
+        raise ValueError(f"upto must be a positive number of interactions, got {upto!r}")
     folders: dict[Path, None] = {}
     for given in paths:
         path = Path(given)
@@ -332,6 +350,8 @@ def find_runs(paths: Sequence[str | Path]) -> list[Run]:
             )
         folders.update(dict.fromkeys(found))
     runs = [load_run(folder) for folder in folders]
+    if upto is not None:
+        runs = [run.truncated(upto) for run in runs]
     seen: dict[tuple[str, str, int], Path] = {}
     for run in runs:
         key = (run.env, run.algo, run.seed)
@@ -581,12 +601,14 @@ def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
                     notes.append(f"{algo_label(row['algo'])}: partner played {shares} over the "
                                  f"last {STRATEGY_WINDOW} interactions.")
         if "return" in ref:
-            seeds = ref.get("seeds", "?")
-            notes.append(f"Paper: final return over {seeds} seeds ({ref['source']}).")
+            over = f" over {ref['seeds']} seeds" if "seeds" in ref else ""
+            notes.append(f"Paper: final return{over} ({ref['source']}).")
         if "text" in ref:
-            notes.append(f"Paper (no numbers given): {ref['text']}.")
+            notes.append(f"Paper: {ref['text']}.")
+        upto = rows[0].get("upto")
+        window = f"the first {upto} interactions" if upto else "interactions"
         notes.append(
-            "Final = mean over the last 10% of interactions per seed; s.e. over seeds; "
+            f"Final = mean over the last 10% of {window} per seed; s.e. over seeds; "
             "gap closed = (R − R_SAC) / (R_Oracle − R_SAC)."
         )
         lines += ["", *notes]
@@ -877,8 +899,11 @@ def _json_safe(value: Any) -> Any:
     return value
 
 
-def write_report(paths: Sequence[str | Path], out_dir: str | Path) -> dict[str, Any]:
+def write_report(paths: Sequence[str | Path], out_dir: str | Path,
+                 upto: int | None = None) -> dict[str, Any]:
     """Find runs under ``paths`` and write the report into ``out_dir`` (created if needed).
+
+    ``upto`` compares every run at one budget: only its first ``upto`` interactions count.
 
     Files: ``curves.png`` (return), ``success.png`` (only if some env defines success),
     ``heatmap.png`` (only if there are Point Mass runs), ``strategies.png`` (only if some run
@@ -891,7 +916,7 @@ def write_report(paths: Sequence[str | Path], out_dir: str | Path) -> dict[str, 
     "files": {name: path}}``. Raises ValueError as :func:`find_runs` does, or when no run has
     logged an interaction yet.
     """
-    runs = find_runs(paths)
+    runs = find_runs(paths, upto)
     if not any(r.n_interactions for r in runs):
         raise ValueError(
             f"{', '.join(str(p) for p in paths)}: no run has logged an interaction yet"
@@ -899,6 +924,8 @@ def write_report(paths: Sequence[str | Path], out_dir: str | Path) -> dict[str, 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     summary = summarize(runs)
+    for row in summary:
+        row["upto"] = upto
     markdown = markdown_table(summary)
     files: dict[str, str] = {}
     files["curves.png"] = str(plot_learning_curves(runs, out_dir / "curves.png", "return"))
