@@ -219,15 +219,16 @@ class LunarLanderEnv(RepeatedInteractionEnv):
 
     def _step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool]:
         action = np.clip(action, -1.0, 1.0)
-        contact = False
         for _ in range(self.frame_skip):
+            # Gymnasium's terminated flag means a crash, rest or |x| >= 1 (off the screen
+            # sideways); only the last always ends the interaction here.
             obs, _, contact, _, _ = self.lander.step(action)
-            # Gymnasium's terminated flag: crash, rest or |x| >= 1 (off the screen sideways).
-            if contact and (self.end_on_contact or abs(obs[0]) >= 1.0):
+            ended = (contact and self.end_on_contact) or abs(obs[0]) >= 1.0
+            if ended:
                 break
         inside = self.observation_space.contains(obs)
         self._state = np.clip(obs, self.observation_space.low, self.observation_space.high)
-        terminated = (contact and self.end_on_contact) or abs(obs[0]) >= 1.0 or not inside
+        terminated = ended or not inside
         if terminated or self.t + 1 >= self.horizon:
             reward = self.terminal_reward(self._state, self._pad)
         else:
