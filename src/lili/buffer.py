@@ -19,9 +19,44 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["InteractionBuffer", "sample"]
+__all__ = ["InteractionBuffer", "sample", "buffer_nbytes", "check_buffer_fits"]
 
 FIELDS = ("obs", "act", "rew", "next_obs", "valid")
+
+
+def buffer_nbytes(capacity: int, horizon: int, obs_dim: int, act_dim: int) -> int:
+    """Bytes an :class:`InteractionBuffer` of these sizes allocates (all fields together)."""
+    per_step = 4 * (2 * obs_dim + act_dim + 1) + 1  # obs, next_obs, act, rew (float32), valid
+    return int(capacity) * (int(horizon) * per_step + 4 + 4 * obs_dim)
+
+
+def _available_memory() -> int | None:
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return None
+
+
+def check_buffer_fits(capacity: int, horizon: int, obs_dim: int, act_dim: int,
+                      fraction: float = 0.5) -> int:
+    """Raise ValueError when the buffer would take more than ``fraction`` of free memory.
+
+    Checked before allocating, so an env with an absurd horizon (1e9) fails with a message that
+    names the sizes instead of a MemoryError (or the machine swapping). Returns the byte count.
+    """
+    need = buffer_nbytes(capacity, horizon, obs_dim, act_dim)
+    free = _available_memory()
+    if free is not None and need > fraction * free:
+        raise ValueError(
+            f"a replay buffer of {capacity} interactions x horizon {horizon} (obs {obs_dim}, "
+            f"act {act_dim}) needs {need / 2**30:.1f} GiB, more than {fraction:.0%} of the "
+            f"{free / 2**30:.1f} GiB available; allowed: a smaller horizon or buffer_capacity"
+        )
+    return need
 
 
 class InteractionBuffer:
@@ -30,6 +65,7 @@ class InteractionBuffer:
     def __init__(self, capacity: int, horizon: int, obs_dim: int, act_dim: int) -> None:
         if capacity < 2:
             raise ValueError(f"buffer capacity={capacity} is invalid; allowed: an integer >= 2")
+        check_buffer_fits(capacity, horizon, obs_dim, act_dim)
         self.capacity, self.horizon = int(capacity), int(horizon)
         self.obs_dim, self.act_dim = int(obs_dim), int(act_dim)
         c, h = self.capacity, self.horizon
