@@ -270,3 +270,35 @@ def test_registration_spaces_and_render_modes() -> None:
         rendering = gym.make("lili/AirHockey-v0", render_mode="rgb_array")
         gym_check_env(rendering.unwrapped)  # with the render checks this time
     rendering.close()
+
+
+def test_the_scripted_influencer_beats_the_greedy_blocker_by_a_tenth() -> None:
+    # The default game is one where influence pays (the env's docstring has the full table): the
+    # influencer drives the striker into the left/middle cycle, the greedy blocker leaves the
+    # modes to the aim noise. Both are told the mode and block (almost) every shot.
+    from lili.envs.air_hockey.scripted import GreedyBlocker, InfluencingBlocker
+    from lili.envs.influence.scripted import play
+
+    greedy = play(AirHockeyEnv(), GreedyBlocker(), 250, seed=0).last(200)
+    influencer = play(AirHockeyEnv(), InfluencingBlocker(), 250, seed=0).last(200)
+    assert influencer.mean_return() >= greedy.mean_return() + 0.1
+    assert influencer.success_rate() >= 0.98 and greedy.success_rate() >= 0.98
+    left, middle, right = influencer.strategy_frequencies(3)
+    assert left >= 0.45 and right <= 0.05
+    # Greedy leaves the striker near uniform: no mode above 45% or below 22%.
+    freq = greedy.strategy_frequencies(3)
+    assert freq.max() <= 0.45 and freq.min() >= 0.22, freq
+
+
+def test_the_old_game_is_one_kwarg_away() -> None:
+    assert AirHockeyEnv().partner.aim_noise == 0.01
+    assert AirHockeyEnv(aim_noise=0.02).partner.aim_noise == 0.02
+
+
+def test_contact_points_lie_on_the_wall_side_of_the_crossing_points() -> None:
+    from lili.envs.air_hockey.scripted import contact_points
+
+    left, middle, right = contact_points(True)
+    assert middle == pytest.approx(0.0, abs=1e-3) and left == pytest.approx(-right, abs=1e-3)
+    # A bank shot comes back from the wall at an angle, so it touches 1-5 cm before it crosses.
+    assert 0.01 < TARGET_X[LEFT] - left < 0.05

@@ -9,6 +9,7 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 
 import lili.envs  # noqa: F401
 from lili.envs.checker import check_env
+from lili.envs.influence.scripted import play
 from lili.envs.lunar_lander import PADS, SUCCESS_RADIUS, LunarLanderEnv, pad_controller
 
 
@@ -59,19 +60,19 @@ def test_terminal_reward_and_success() -> None:
 
 
 def test_interactions_run_to_the_horizon_unless_end_on_contact() -> None:
-    # Engines off: it falls and lands or crashes well before step 60.
-    assert all(r["steps"] < 60 for r in _play(LunarLanderEnv(end_on_contact=True), 2))
-    # By default it lies where it fell until the horizon.
-    assert all(r["steps"] == 60 for r in _play(LunarLanderEnv(), 2))
+    # Engines off: by default (Gymnasium's ends) it falls and lands or crashes before step 60.
+    assert all(r["steps"] < 60 for r in _play(LunarLanderEnv(), 2))
+    # With end_on_contact=False it lies where it fell until the horizon.
+    assert all(r["steps"] == 60 for r in _play(LunarLanderEnv(end_on_contact=False), 2))
     # Flying off (full thrust spins it away) ends it at the same step either way.
     for action in ((1.0, 1.0), (0.5, -1.0)):
-        (a,) = _play(LunarLanderEnv(), 1, action)
+        (a,) = _play(LunarLanderEnv(end_on_contact=False), 1, action)
         (b,) = _play(LunarLanderEnv(end_on_contact=True), 1, action)
         assert a["steps"] == b["steps"] < 30
 
 
 def _controller_returns(end_on_contact: bool, target, n: int = 8) -> float:
-    env = LunarLanderEnv(end_on_contact=end_on_contact)
+    env = LunarLanderEnv(end_on_contact=end_on_contact, reward="potential")
     obs, info = env.reset(seed=0)
     total = 0.0
     for _ in range(n):
@@ -83,9 +84,10 @@ def _controller_returns(end_on_contact: bool, target, n: int = 8) -> float:
     return total / n
 
 
-def test_by_default_the_return_ranks_landing_on_the_pad_first() -> None:
-    # Why interactions run to the horizon by default: with end_on_contact=True, dropping with
-    # the engines off ends the per-step cost early and returns more than landing on the pad.
+def test_the_literal_reward_pays_for_dropping_with_gymnasiums_ends() -> None:
+    # The literal reading (reward="potential") with end_on_contact=True: dropping with the
+    # engines off ends the per-step cost early and returns more than landing on the pad;
+    # played to the horizon it ranks landing first again.
     def engines_off(obs, pad):
         return np.array([-1.0, 0.0], np.float32)
 
@@ -96,6 +98,47 @@ def test_by_default_the_return_ranks_landing_on_the_pad_first() -> None:
     right = _controller_returns(False, pad_controller)
     assert right > _controller_returns(False, engines_off) + 10
     assert right > _controller_returns(False, wrong_pad) + 10
+
+
+def _pad(obs, info):
+    return pad_controller(obs, info["strategy"])
+
+
+def _centre(obs, info):
+    return pad_controller(obs, np.array([0.0, 0.0]))
+
+
+def _wrong_pad(obs, info):
+    return pad_controller(obs, np.array([-info["strategy"][0], info["strategy"][1]]))
+
+
+def _drop(obs, info):
+    return np.array([-1.0, 0.0], np.float32)
+
+
+def test_the_default_reward_ranks_pad_centre_wrong_pad_drop() -> None:
+    # The default reading (the potential's difference, Gymnasium's ends) ranks the scripted
+    # landers as the task intends (the module docstring has the table for all four readings).
+    env = LunarLanderEnv()
+    assert env.reward == "difference" and env.end_on_contact
+    returns = [play(LunarLanderEnv(), policy, 24, seed=0).mean_return()
+               for policy in (_pad, _centre, _wrong_pad, _drop)]
+    assert returns == sorted(returns, reverse=True), returns
+    assert returns[0] > returns[1] + 1.0  # landing on the pad is worth most of the +1
+
+
+def test_the_difference_reward_telescopes() -> None:
+    # Each non-final step pays phi(s') - phi(s) + fuel(a); summed, the potentials telescope.
+    env = LunarLanderEnv(end_on_contact=False)
+    obs, info = env.reset(seed=3)
+    pad, total, fuel, first = PADS[info["strategy_id"]], 0.0, 0.0, obs
+    for _ in range(10):
+        a = _pad(obs, info)
+        obs, r, term, trunc, info = env.step(a)
+        assert not (term or trunc)
+        total, fuel = total + r, fuel + LunarLanderEnv.fuel_reward(a)
+    expected = LunarLanderEnv.potential(obs, pad) - LunarLanderEnv.potential(first, pad) + fuel
+    assert total == pytest.approx(expected, abs=1e-9)
 
 
 def test_a_controller_that_knows_the_pad_reaches_both_pads() -> None:
@@ -157,6 +200,8 @@ def test_render_draws_the_target_pad() -> None:
     ({"frame_skip": 0}, "frame_skip=0"),
     ({"horizon": 2.5}, "horizon=2.5"),
     ({"end_on_contact": "yes"}, "end_on_contact='yes'"),
+    ({"reward": "literal"}, "reward='literal'.*'potential', 'difference'"),
+    ({"reward": None}, "reward=None"),
     ({"render_mode": "human"}, "render_mode='human'"),
 ])
 def test_bad_kwargs(kwargs, match) -> None:

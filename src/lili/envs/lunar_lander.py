@@ -11,13 +11,23 @@ Coordinates are those of the lander's observation (``obs[0], obs[1]``: x in unit
 viewport width, 0 at the centre; y in units of half the viewport height, 0 where the lander
 rests on Gymnasium's central helipad).
 
-Reward, as the appendix gives it. Every step that is not the last of the interaction:
+Reward, as the appendix gives it, in one of two readings (``reward``). The appendix's shaping
+potential and fuel terms are
 
-    r = -||s_pos - z||^2 - ||s_vel||^2 - |s_theta|
-        - 0.0015 * (clip(a_0, 0, 1) + 1) - 0.0003 * clip(|a_1|, 0.5, 1)
+    phi(s) = -||s_pos - z||^2 - ||s_vel||^2 - |s_theta|
+    fuel(a) = -0.0015 * (clip(a_0, 0, 1) + 1) - 0.0003 * clip(|a_1|, 0.5, 1)
 
 with ``s_pos = obs[0:2]``, ``s_vel = obs[2:4]``, ``s_theta = obs[4]`` (the observation's units)
-and ``a`` the action of that step. The two fuel terms are charged as written, on every step:
+and ``a`` the action of that step. Every step that is not the last of the interaction pays
+
+- ``reward="difference"`` (the default): ``r_t = phi(s_{t+1}) - phi(s_t) + fuel(a_t)``, the
+  potential's change, which is how Gymnasium pays its own shaping (``shaping -
+  prev_shaping``). The appendix's fuel coefficients 0.0015 and 0.0003 and its +-1 terminal
+  reward are exactly Gymnasium's (0.30 x 0.5, 0.03, +-100) divided by 100, so this is
+  Gymnasium's reward at the appendix's scale, with the appendix's squared norms.
+- ``reward="potential"`` (the appendix read literally): ``r_t = phi(s_{t+1}) + fuel(a_t)``.
+
+The two fuel terms are charged as written, on every step:
 Gymnasium charges them (x100) only while an engine fires (``a_0 > 0``, ``|a_1| > 0.5``), the
 appendix's formula does not make that exception. The last step of an interaction (terminated or
 at the horizon) gets the terminal reward instead of the per-step one: +1 if
@@ -46,30 +56,46 @@ Choices where the appendix is silent (and why):
   end in about 40%: it often bounces or topples off the mesa, or has not settled by step 60
   (63% with ``horizon=100``). So success at the end is a strict measure here; the return is the
   smoother one.
-- **End of an interaction.** By default (``end_on_contact=False``) it lasts ``horizon`` steps
-  whatever happens: a lander that crashed or came to rest lies there, still paying the per-step
-  cost, until the horizon. It ends early only when the lander leaves the screen sideways
-  (|x| >= 1) or a state component leaves Gymnasium's observation box (flown off the top, spun
-  beyond 2 pi; the observation is clipped into the box then). This departs from Gymnasium,
-  which also ends at a crash or at rest (``end_on_contact=True`` restores that), because with
-  the appendix's reward those early ends pay: every step costs at least the squared distance
-  to the pad, so ending the interaction early is worth more than landing. Measured over 40
-  interactions (seed 0), mean return per interaction:
+- **End of an interaction** (``end_on_contact``). With ``True`` (the default, Gymnasium's
+  ends) it ends when Gymnasium's lander crashes (its body touches the ground) or comes to
+  rest. With ``False`` it lasts ``horizon`` steps whatever happens: a lander that crashed or
+  came to rest lies there until the horizon. Either way it also ends when the lander leaves the
+  screen sideways (|x| >= 1) or a state component leaves Gymnasium's observation box (flown off
+  the top, spun beyond 2 pi; the observation is clipped into the box then).
+- **Which reading is the default, and why.** Mean return per interaction (success) of four
+  scripted policies, 50 interactions x seeds 0-1 each
+  (``python benchmarks/lunar_lander_scripted.py``):
 
-  =======================================  ===================  ====================
-  scripted policy                          end_on_contact=True  default (to horizon)
-  =======================================  ===================  ====================
-  engines off (drop near the centre)       -33.1                -85.5
-  :func:`pad_controller` to the centre     -33.0                -69.0
-  :func:`pad_controller` to the wrong pad  -44.7                -74.1
-  :func:`pad_controller` to the pad        -37.2                -46.2
-  =======================================  ===================  ====================
+  ==========================  ============  ============  ============  ============
+  reward, end_on_contact      to the pad    to centre     wrong pad     drop
+  ==========================  ============  ============  ============  ============
+  difference, True (default)  +2.33 (87%)   +0.34 (6%)    -0.04 (0%)    -2.12 (13%)
+  difference, False           +0.76 (35%)   +0.40 (1%)    -1.38 (1%)    -0.02 (7%)
+  potential, True             -35.60 (87%)  -32.88 (6%)   -44.92 (0%)   -32.01 (13%)
+  potential, False            -45.50 (35%)  -66.98 (1%)   -72.94 (1%)   -84.24 (7%)
+  ==========================  ============  ============  ============  ============
 
-  With Gymnasium's ends a return-maximising agent should drop, not land; played to the horizon
-  the return ranks landing on this interaction's pad first, by a wide margin, as the task
-  intends. (Agents that bootstrap across interactions, as LILI does, see the other side of the
-  same problem: ending an interaction starts the next one high above the pad, so with
-  Gymnasium's ends they learned to hover until the horizon instead of landing.)
+  ("to the pad" is :func:`pad_controller` told this interaction's pad, "to centre" the same
+  controller landing on the ground between the mesas, "wrong pad" it told the other pad,
+  "drop" engines off from the start.) Read literally, the potential is a per-step *cost* of
+  at least the squared distance to the pad, so with Gymnasium's ends dropping at once earns
+  the most. Played to the horizon it ranks the four as the task intends too (the default
+  before issue 14), but every return is then mostly the price of the path: the flight down
+  from the top of the screen and the steps spent on the ground (the pad lander's -45.5 is
+  46.5 below the +1 of a perfect landing, and how fast it got down matters as much as where),
+  and SAC, LILI and the Oracle trained under it for 2000 interactions learned to sit in the
+  middle, not to land (``benchmarks/README.md``). Paid as a difference, the per-step
+  terms telescope to ``phi(s_{T-1}) - phi(s_0)`` plus fuel (the last step pays the terminal
+  reward instead): potential-based shaping (Ng et al. 1999) up to that last step, which keeps
+  the sparse task's preferences (land on the pad: +1) nearly intact, and the ranking is
+  the task's: pad, centre, wrong pad, drop, with landing worth 2 more than the next best. Played
+  to the horizon the difference reading ranks the drop above the wrong pad (a lander that fell
+  and lies still stops paying, one that toppled off a mesa keeps losing potential), so the
+  default pairs it with Gymnasium's ends. The old game (before issue 14) is
+  ``reward="potential", end_on_contact=False``. Across interactions, the difference reading
+  also removes the reason that drove agents that bootstrap across the boundary (LILI) to hover
+  to the horizon under the literal reading with early ends: the next interaction's value no
+  longer carries the flight's large cost, so ending an interaction sooner does not look worse.
 - **Terrain and initial push.** Gymnasium draws them from its lander's ``np_random``. At every
   interaction the lander is reset with a seed drawn from this env's ``np_random``, so
   ``reset(seed)`` replays the whole sequence (terrain, push, engine dispersion, pads).
@@ -91,10 +117,12 @@ from gymnasium.envs.box2d import lunar_lander as gym_ll
 
 from lili.envs.core import RepeatedInteractionEnv
 
-__all__ = ["LunarLanderEnv", "AlternatingPadPartner", "PadLander", "PADS", "pad_controller"]
+__all__ = ["LunarLanderEnv", "AlternatingPadPartner", "PadLander", "PADS", "REWARDS",
+           "pad_controller"]
 
 PADS = np.array([[-0.4, 0.2], [0.4, 0.2]])
 SUCCESS_RADIUS = 0.1
+REWARDS = ("potential", "difference")  # the two readings of the appendix's per-step reward
 # The world (Box2D) frame of Gymnasium's lander: width W, height H, and the factors that turn
 # world coordinates into the observation's.
 _W = gym_ll.VIEWPORT_W / gym_ll.SCALE
@@ -184,16 +212,23 @@ class LunarLanderEnv(RepeatedInteractionEnv):
             them. An integer >= 1.
         horizon: the most env steps in one interaction. An integer >= 1.
         end_on_contact: end the interaction when Gymnasium's lander crashes (its body touches
-            the ground) or comes to rest (True), or play on to the horizon (False, the default;
-            see "End of an interaction" in the module docs for why).
+            the ground) or comes to rest (True, the default, as Gymnasium), or play on to the
+            horizon (False).
+        reward: ``"difference"`` (the default: the appendix's potential paid as its change
+            per step, as Gymnasium pays its shaping) or ``"potential"`` (the appendix read
+            literally). See "Which reading is the default, and why" in the module docs.
         render_mode: ``"rgb_array"`` or None.
     """
 
     def __init__(
-        self, frame_skip: int = 5, horizon: int = 60, end_on_contact: bool = False,
-        render_mode: str | None = None,
+        self, frame_skip: int = 5, horizon: int = 60, end_on_contact: bool = True,
+        reward: str = "difference", render_mode: str | None = None,
     ) -> None:
         super().__init__(render_mode)
+        if not isinstance(reward, str) or reward not in REWARDS:
+            raise ValueError(
+                f"reward={reward!r} is invalid; allowed: {', '.join(map(repr, REWARDS))}")
+        self.reward = reward
         if not isinstance(end_on_contact, (bool, np.bool_)):
             raise ValueError(f"end_on_contact={end_on_contact!r} is invalid; allowed: True, False")
         self.end_on_contact = bool(end_on_contact)
@@ -209,12 +244,14 @@ class LunarLanderEnv(RepeatedInteractionEnv):
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         self._state = np.zeros(8, dtype=np.float32)
         self._pad = PADS[0]
+        self._potential = 0.0
 
     def _begin(self) -> np.ndarray:
         self._pad = PADS[self.partner.pad]
         self.lander.target = self.partner.pad
         obs, _ = self.lander.reset(seed=int(self.np_random.integers(2**31)))
         self._state = np.clip(obs, self.observation_space.low, self.observation_space.high)
+        self._potential = self.potential(self._state, self._pad)
         return self._state.copy()
 
     def _step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool]:
@@ -231,20 +268,31 @@ class LunarLanderEnv(RepeatedInteractionEnv):
         terminated = ended or not inside
         if terminated or self.t + 1 >= self.horizon:
             reward = self.terminal_reward(self._state, self._pad)
-        else:
+        elif self.reward == "potential":
             reward = self.step_reward(self._state, action, self._pad)
+        else:
+            potential = self.potential(self._state, self._pad)
+            reward = potential - self._potential + self.fuel_reward(action)
+            self._potential = potential
         return self._state.copy(), reward, terminated
 
     @staticmethod
-    def step_reward(state: np.ndarray, action: np.ndarray, pad: np.ndarray) -> float:
-        """The appendix's per-step reward (see the module docstring)."""
+    def potential(state: np.ndarray, pad: np.ndarray) -> float:
+        """The appendix's shaping potential: -||s_pos - z||^2 - ||s_vel||^2 - |s_theta|."""
         s = np.asarray(state, dtype=np.float64)
+        return float(-np.sum((s[0:2] - pad) ** 2) - np.sum(s[2:4] ** 2) - abs(s[4]))
+
+    @staticmethod
+    def fuel_reward(action: np.ndarray) -> float:
+        """The appendix's two fuel terms (charged on every step, as written)."""
         a = np.asarray(action, dtype=np.float64)
-        return float(
-            -np.sum((s[0:2] - pad) ** 2) - np.sum(s[2:4] ** 2) - abs(s[4])
-            - 0.0015 * (np.clip(a[0], 0.0, 1.0) + 1.0)
-            - 0.0003 * np.clip(abs(a[1]), 0.5, 1.0)
-        )
+        return float(-0.0015 * (np.clip(a[0], 0.0, 1.0) + 1.0)
+                     - 0.0003 * np.clip(abs(a[1]), 0.5, 1.0))
+
+    @staticmethod
+    def step_reward(state: np.ndarray, action: np.ndarray, pad: np.ndarray) -> float:
+        """The appendix's per-step reward read literally: potential plus fuel terms."""
+        return LunarLanderEnv.potential(state, pad) + LunarLanderEnv.fuel_reward(action)
 
     @staticmethod
     def terminal_reward(state: np.ndarray, pad: np.ndarray) -> float:

@@ -13,7 +13,8 @@ chosen here (the paper's robots and table are not specified; ``table.xml`` holds
   |x| = 0.45). Each interaction starts with the paddle in the middle (x = 0).
 - The puck (radius 4 cm) starts at (0, 0.6) in front of the striker's paddle. The striker drives
   its paddle at 1.5 m/s into the puck along the direction of its mode's aim, rotated by the
-  shot's aim noise (Gaussian, ``aim_noise`` radians), and stops after its first 40 ms. The puck
+  shot's aim noise (Gaussian, ``aim_noise`` radians, default 0.01: about 1.5 cm at the ego's
+  line; see "What influence is worth" below), and stops after its first 40 ms. The puck
   leaves at about 2.6 m/s and from then on MuJoCo alone decides its path, wall bounces
   included (restitution about 0.9, frictionless walls, light viscous drag).
 - Modes: 0 = left, 1 = middle, 2 = right. The middle shot goes straight down the table to
@@ -35,6 +36,36 @@ chosen here (the paper's robots and table are not specified; ``table.xml`` holds
   appendix's table): left: puck left of ego -> middle, right of ego -> right; middle: left ->
   left, right -> right; right: left -> middle, right -> left. "Left of ego" means
   x_puck < x_paddle at the end of the interaction (a tie counts as right).
+
+What influence is worth (scripted blockers, ``lili.envs.air_hockey.scripted``; measured with
+``python benchmarks/air_hockey_scripted.py``, 600 interactions, seeds 0-1, last 400 counted):
+
+  ==========================================  =====  =========================  ==============
+  blocker (told the mode?)                    block  reward / interaction       left/mid/right
+  ==========================================  =====  =========================  ==============
+  random (no)                                 28.7%  0.140                      41 / 40 / 19%
+  middle: holds x = 0 (no)                    39.5%  0.257                      40 / 40 / 21%
+  crossing: head-on at ``TARGET_X`` (yes)     100%   1.368                      40 / 39 / 21%
+  greedy: at the contact point (yes)          100%   1.295                      32 / 36 / 32%
+  influencer: 4 cm beside it (yes)            100%   1.465                      50 / 50 / 0%
+  ==========================================  =====  =========================  ==============
+
+  The greedy blocker meets each shot where the puck first touches a paddle centred below it, so
+  the side (and the striker's next mode) is left to the aim noise: the modes stay near uniform,
+  as the paper reports for LILI (no influence). The influencer meets it 4 cm beside that point
+  and so picks the side, driving the striker into the left/middle cycle: left every other shot,
+  the most the table allows (left never follows left), worth (2 + 1) / 2 = 1.5 a shot before
+  the distance cost. Influence is worth +0.169 per interaction (+13%; the paper: LILI 1.15
+  against 1.0, +15%). The crossing blocker blocks as often as the greedy one, but a bank shot
+  arrives at an angle and touches a head-on paddle 1-2 cm to its wall's side, so it always sends
+  the striker the same way, a fixed influence that happens to favour left (40%); the influencer
+  beats it by 0.097.
+
+  Why ``aim_noise=0.01``: it is the largest noise at which the greedy point still blocks every
+  shot (at the previous default 0.02 it misses 2.5%, and the influencer's 4 cm offset picks the
+  wrong side for 9% of right shots; influencer 1.423, greedy 1.254, crossing 1.356). The old
+  game is ``AirHockeyEnv(aim_noise=0.02)`` (``--env-kwarg aim_noise=0.02``); nothing else
+  changed. ``bank_shots=False`` (direct shots): greedy 1.296, influencer 1.460, crossing 1.203.
 
 Observation (as in the appendix): ``[x_paddle, y_puck]`` (float32), the paddle's lateral
 position and the puck's position along the table; never the puck's lateral position or the
@@ -163,7 +194,7 @@ class StrikerPartner:
 
     strategy_space = spaces.Box(0.0, 1.0, shape=(3,), dtype=np.float32)
 
-    def __init__(self, aim_noise: float = 0.02) -> None:
+    def __init__(self, aim_noise: float = 0.01) -> None:
         self.aim_noise = _check_aim_noise(aim_noise)
         self.mode = MIDDLE
         self.aim_offset = 0.0
@@ -197,7 +228,8 @@ class AirHockeyEnv(RepeatedInteractionEnv):
 
     Args:
         aim_noise: standard deviation of each shot's direction error in radians, in [0, 0.5]
-            (0.02 rad is about 3 cm at the ego's line).
+            (0.01 rad, the default, is about 1.5 cm at the ego's line; 0.02 restores the game
+            before issue 14, see "What influence is worth" in the module docs).
         bank_shots: left and right shots bounce off a side wall (True) or go straight (False).
         render_mode: None or ``"rgb_array"`` (a top view, 240 x 440, drawn headless with EGL;
             about 6 ms a frame with software EGL on an idle core).
@@ -208,7 +240,7 @@ class AirHockeyEnv(RepeatedInteractionEnv):
 
     def __init__(
         self,
-        aim_noise: float = 0.02,
+        aim_noise: float = 0.01,
         bank_shots: bool = True,
         render_mode: str | None = None,
     ) -> None:

@@ -1,0 +1,1 @@
+"""Small repeated-interaction envs whose best greedy and influencing policies are known."""
