@@ -1,0 +1,150 @@
+"""The one adapter between the play page and the agent API (lili.agents, lili.buffer).
+
+Everything the page needs from a trained blocker goes through :class:`Blocker` (shared by all
+connections: it holds the parameters) and :class:`BlockerGame` (one per game: the acting state
+and the buffer of finished interactions). The latent is updated exactly as in training and in
+``lili.evaluate``: z^1 = 0, and after interaction i ends, z^{i+1} = E(tau^i) with
+``agent.next_latent_state(buffer)`` on an InteractionBuffer holding the finished interactions.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+__all__ = ["Blocker", "BlockerGame", "SHIPPED_AGENT", "agent_file_for_run", "train_and_save",
+           "interaction_steps"]
+
+SHIPPED_AGENT = Path(__file__).with_name("agents") / "air_hockey.msgpack"
+
+
+def agent_file_for_run(run: str | Path) -> tuple[Path, dict[str, Any]]:
+    """The newest checkpoint's agent file of a run folder and the run's resolved config.
+
+    Raises ValueError naming the folder when it is not a run folder or has no checkpoint.
+    """
+    import yaml
+
+    run_dir = Path(run)
+    cfg_path = run_dir / "config.yaml"
+    if not cfg_path.is_file():
+        raise ValueError(f"--run {str(run_dir)!r} is not a run folder (config.yaml is missing)")
+    try:
+        cfg = yaml.safe_load(cfg_path.read_text())
+        ptr = json.loads((run_dir / "checkpoints" / "latest.json").read_text())
+        path = run_dir / "checkpoints" / ptr["checkpoint"] / "agent.msgpack"
+    except Exception:
+        raise ValueError(f"--run {str(run_dir)!r} has no readable checkpoint "
+                         "(checkpoints/latest.json is missing or corrupt)") from None
+    if not isinstance(cfg, dict) or not path.is_file():
+        raise ValueError(f"--run {str(run_dir)!r} has no agent file at {path}")
+    return path, cfg
+
+
+class Blocker:
+    """A trained agent acting as the air hockey blocker (deterministic actions, no learning)."""
+
+    def __init__(self, agent: Any, source: str) -> None:
+        self.agent = agent
+        self.source = source
+        self.algo: str = agent.algo
+        self.latent_dim: int = int(agent.latent_dim)
+
+    @classmethod
+    def load(cls, path: str | Path, env: gym.Env) -> Blocker:
+        """Load a saved agent for ``env``; ValueError (CheckpointError) when it does not fit."""
+        from lili.agents import load_agent
+
+        agent = load_agent(path, env)
+        obs_dim = int(env.observation_space.shape[0])
+        if agent.obs_dim != obs_dim:
+            # The Oracle sees the true mode, which a person's shot does not reveal to it.
+            raise ValueError(f"{path} holds a {agent.algo!r} agent that observes {agent.obs_dim} "
+                             f"numbers; the play page gives {obs_dim} (every algo but oracle)")
+        return cls(agent, str(path))
+
+    def new_game(self) -> BlockerGame:
+        """Acting state for a fresh sequence of interactions (z^1 = 0)."""
+        return BlockerGame(self)
+
+
+class BlockerGame:
+    """One game's acting state: call :meth:`act` each step, :meth:`observe` after it, and
+    :meth:`end_interaction` when the shot is over."""
+
+    def __init__(self, blocker: Blocker) -> None:
+        from lili.buffer import InteractionBuffer
+
+        agent = blocker.agent
+        self.agent = agent
+        history = int(getattr(agent, "history", 1) or 1)
+        self.buffer = InteractionBuffer(max(2, history + 1), agent.horizon, agent.obs_dim,
+                                        agent.act_dim)
+        self._next = agent.initial_state()
+        self._acting = self._next
+        self._traj: dict[str, list] = {k: [] for k in ("obs", "act", "rew", "next_obs")}
+
+    @property
+    def latent(self) -> np.ndarray:
+        """The latent the agent will act with in the next (or current) interaction."""
+        return np.asarray(self._next.z, np.float32)
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """The action for ``obs`` in env units."""
+        if not self._traj["obs"]:
+            self._acting = self._next
+        action, self._acting = self.agent.predict(obs, self._acting, deterministic=True)
+        a = np.asarray(action, np.float32)
+        # The buffer holds actions in the networks' [-1, 1] range, as the training loop stores.
+        low, high = self.agent.act_low, self.agent.act_high
+        self._traj["obs"].append(np.asarray(obs, np.float32))
+        self._traj["act"].append(2.0 * (a - low) / (high - low) - 1.0)
+        return a
+
+    def observe(self, reward: float, next_obs: np.ndarray) -> None:
+        """Record the step's reward and next observation."""
+        self._traj["rew"].append(float(reward))
+        self._traj["next_obs"].append(np.asarray(next_obs, np.float32))
+
+    def end_interaction(self, next_first_obs: np.ndarray) -> np.ndarray:
+        """Store the finished interaction and move to z^{i+1} = E(tau^i); return it.
+
+        ``next_first_obs`` only feeds the training target's bootstrap, never the latent.
+        """
+        traj = {k: np.asarray(v, np.float32) for k, v in self._traj.items()}
+        self.buffer.add(traj, np.asarray(next_first_obs, np.float32))
+        self._next = self.agent.next_latent_state(self.buffer)
+        self._traj = {k: [] for k in self._traj}
+        return self.latent
+
+
+def interaction_steps(env: gym.Env, game: BlockerGame, obs: np.ndarray
+                      ) -> Iterator[tuple[int, float, bool, dict[str, Any]]]:
+    """Play one interaction from its first observation ``obs`` with the blocker; after every
+    step yield ``(t, reward, done, info)``. The caller ends the interaction in ``game``."""
+    t, done = 0, False
+    while not done:
+        action = game.act(obs)
+        obs, reward, terminated, truncated, info = env.step(action)
+        game.observe(reward, obs)
+        t += 1
+        done = bool(terminated or truncated)
+        yield t, float(reward), done, info
+
+
+def train_and_save(algo: str, interactions: int, seed: int, out: str | Path,
+                   env_kwargs: dict[str, Any] | None = None,
+                   config: dict[str, Any] | None = None, progress: bool = False) -> Path:
+    """Train ``algo`` on air hockey for ``interactions`` and save the agent file to ``out``."""
+    import lili.envs  # noqa: F401 - registers the ids
+    from lili.agents import make_agent
+
+    env = gym.make("lili/AirHockey-v0", **(env_kwargs or {}))
+    agent = make_agent(algo, env, config, seed)
+    agent.learn(interactions, progress=progress)
+    return agent.save(out)

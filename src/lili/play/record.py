@@ -1,0 +1,67 @@
+"""Each session's shots as CSV, like the paper's study: one row per shot.
+
+Columns: ``session, shot, aim`` (radians, see :mod:`lili.play.striker`), ``mode`` (the mode
+whose aim is nearest: left, middle or right), ``blocked`` (0/1), ``reward`` (the blocker's
+return for the shot), ``puck_x`` and ``paddle_x`` (metres, where the shot ended).
+
+With a folder every session gets its own file ``<session>.csv``; with one file (``--record``)
+all sessions of the server append to it. Nothing is written before a session's first shot.
+"""
+
+from __future__ import annotations
+
+import csv
+import time
+from pathlib import Path
+from typing import Any
+
+__all__ = ["Recorder", "SessionRecord", "COLUMNS"]
+
+COLUMNS = ("session", "shot", "aim", "mode", "blocked", "reward", "puck_x", "paddle_x")
+
+
+class SessionRecord:
+    """Appends one session's rows to a CSV file (header when the file is new)."""
+
+    def __init__(self, path: Path, session: str) -> None:
+        self.path, self.session = path, session
+
+    def write(self, row: dict[str, Any]) -> None:
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        new = not self.path.exists()
+        with self.path.open("a", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=COLUMNS)
+            if new:
+                w.writeheader()
+            w.writerow({"session": self.session, **{k: row[k] for k in COLUMNS[1:]}})
+
+
+class Recorder:
+    """Hands out a :class:`SessionRecord` per session, into ``folder`` or all into ``file``."""
+
+    def __init__(self, folder: str | Path | None = None, file: str | Path | None = None) -> None:
+        if (folder is None) == (file is None):
+            raise ValueError("a Recorder needs exactly one of folder or file")
+        self.folder = None if folder is None else Path(folder)
+        self.file = None if file is None else Path(file)
+        if self.file is not None:
+            if self.file.exists():
+                raise ValueError(f"--record {str(self.file)!r} already exists; allowed: a new "
+                                 "file (nothing is overwritten)")
+            if not self.file.parent.is_dir():
+                raise ValueError(f"--record {str(self.file)!r}: the folder "
+                                 f"{str(self.file.parent)!r} does not exist")
+        self._count = 0
+
+    @property
+    def where(self) -> Path:
+        """The folder or file the sessions go to."""
+        return self.file if self.file is not None else self.folder  # type: ignore[return-value]
+
+    def session(self) -> SessionRecord:
+        """A record for a new session, named by the time and a counter."""
+        self._count += 1
+        name = f"{time.strftime('%Y%m%d-%H%M%S')}-{self._count}"
+        if self.file is not None:
+            return SessionRecord(self.file, name)
+        return SessionRecord(self.folder / f"session-{name}.csv", name)  # type: ignore[operator]

@@ -1,0 +1,120 @@
+"""One game on the air hockey table: the person's (or bot's) shots against the trained blocker.
+
+A :class:`GameSession` owns its own env (the training env, with :class:`AimedStriker` in place
+of the robot striker), the blocker's acting state and the session's record. :meth:`shoot` plays
+one shot and yields the table's state after every decision step, so the server can stream it
+and the bot can ignore it.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import gymnasium as gym
+import mujoco
+
+from lili.play.policy import Blocker, interaction_steps
+from lili.play.probe import ModeProbe
+from lili.play.record import SessionRecord
+from lili.play.striker import MODE_NAMES, AimedStriker
+
+__all__ = ["GameSession", "make_play_env"]
+
+
+def make_play_env(env_kwargs: dict[str, Any]) -> gym.Env:
+    """The air hockey env of training with ``env_kwargs`` (ValueError when they do not fit)."""
+    import lili.envs  # noqa: F401 - registers the ids
+
+    try:
+        return gym.make("lili/AirHockey-v0", **env_kwargs)
+    except TypeError as e:
+        raise ValueError(f"air hockey does not accept the env kwargs {env_kwargs}: {e}") from None
+
+
+class GameSession:
+    """A game of ``shots`` shots; see the module docstring."""
+
+    def __init__(self, blocker: Blocker, env_kwargs: dict[str, Any], shots: int,
+                 record: SessionRecord | None = None, probe: ModeProbe | None = None,
+                 seed: int = 0) -> None:
+        self.env = make_play_env(env_kwargs)
+        self.table = self.env.unwrapped
+        self.striker = AimedStriker(self.table.bank_shots)
+        self.table.partner = self.striker
+        self.game = blocker.new_game()
+        self.shots, self.seed = int(shots), int(seed)
+        self.record, self.probe = record, probe
+        self.shot = 0
+        self.blocks = [0, 0, 0]
+        self.by_mode = [0, 0, 0]
+        self.step_seconds: list[float] = []
+        m = self.table.model
+        self._striker_q = [int(m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, n)])
+                           for n in ("striker_x", "striker_y")]
+
+    @property
+    def over(self) -> bool:
+        """All shots of the game have been played."""
+        return self.shot >= self.shots
+
+    def state(self, t: int) -> dict[str, Any]:
+        """The table as the page draws it (metres, the env's frame)."""
+        puck = self.table.puck
+        striker = self.table.data.qpos[self._striker_q]
+        return {"type": "frame", "shot": self.shot + 1, "t": t,
+                "puck": [round(float(puck[0]), 4), round(float(puck[1]), 4)],
+                "paddle": round(self.table.paddle_x, 4),
+                "striker": [round(float(striker[0]), 4), round(float(striker[1]), 4)]}
+
+    def score(self) -> dict[str, Any]:
+        """Blocks and shots so far, in total and by the shots' modes (left, middle, right)."""
+        return {"shots": self.shot, "blocks": sum(self.blocks), "of": self.shots,
+                "by_mode": {MODE_NAMES[m]: [self.blocks[m], self.by_mode[m]] for m in range(3)}}
+
+    def belief(self) -> dict[str, Any] | None:
+        """What the blocker expects of the next shot (None for an agent without a latent)."""
+        return None if self.probe is None else self.probe.belief(self.game.latent)
+
+    def shoot(self, aim: float) -> Iterator[dict[str, Any]]:
+        """Play one shot aimed at ``aim`` radians; yield frames, then the result message."""
+        if self.over:
+            raise ValueError(f"the game is over ({self.shots} of {self.shots} shots)")
+        mode = self.striker.aim(aim)
+        if self.shot == 0:
+            obs, _ = self.env.reset(seed=self.seed)
+        else:
+            obs, _ = self.env.reset()
+        first_obs, ret, t, info = obs, 0.0, 0, {}
+        yield self.state(0)
+        start = time.perf_counter()
+        for step in interaction_steps(self.env, self.game, obs):
+            t, reward, _done, info = step
+            self.step_seconds.append(time.perf_counter() - start)
+            ret += reward
+            yield self.state(t)
+            start = time.perf_counter()
+        blocked = bool(info.get("success", False))
+        puck_x, paddle_x = float(self.table.puck[0]), self.table.paddle_x
+        # Every air hockey interaction starts from the same observation, so this interaction's
+        # first one stands in for the next's (it feeds training targets only, not the latent).
+        self.game.end_interaction(first_obs)
+        self.shot += 1
+        self.by_mode[mode] += 1
+        self.blocks[mode] += int(blocked)
+        row = {"shot": self.shot, "aim": round(float(aim), 5), "mode": MODE_NAMES[mode],
+               "blocked": int(blocked), "reward": round(float(ret), 5),
+               "puck_x": round(puck_x, 4), "paddle_x": round(paddle_x, 4)}
+        if self.record is not None:
+            self.record.write(row)
+        yield {"type": "result", **row, "side": self.striker.last_outcome, "steps": t,
+               "score": self.score(), "belief": self.belief(), "done": self.over}
+
+    def play(self, aim: float) -> dict[str, Any]:
+        """Play one shot without streaming; return its result message."""
+        *_, result = self.shoot(aim)
+        return result
+
+    def close(self) -> None:
+        self.env.close()
