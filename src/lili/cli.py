@@ -1,4 +1,4 @@
-"""Command line: ``lili train | eval | report | check-env``.
+"""Command line: ``lili train | eval | report | check-env | play``.
 
 Every bad input ends with one line ``lili: error: ...`` naming the value and what is allowed,
 exit code 2, and nothing overwritten.
@@ -161,6 +161,12 @@ def cmd_check_env(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_play(args: argparse.Namespace) -> int:
+    from lili.play.command import run_play
+
+    return run_play(args)
+
+
 def build_parser() -> argparse.ArgumentParser:
     from lili.agents import ALGOS
 
@@ -199,6 +205,12 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--interactions", type=int, default=6)
     c.add_argument("--seed", type=int, default=0)
     c.set_defaults(func=cmd_check_env)
+
+    from lili.play.command import add_arguments as play_arguments
+
+    p_play = sub.add_parser("play", help="play against a trained agent in a browser (or a bot)")
+    play_arguments(p_play)
+    p_play.set_defaults(func=cmd_play)
     return p
 
 
