@@ -9,13 +9,18 @@ entropy -|A|). The few additions, each documented below, address the failure mod
 from __future__ import annotations
 
 import dataclasses
+import math
+import numbers
+import re
+from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-__all__ = ["AgentConfig", "load_config", "BOUNDARY_MODES", "extra_options"]
+__all__ = ["AgentConfig", "load_config", "read_yaml", "yaml_value", "BOUNDARY_MODES",
+           "extra_options"]
 
 BOUNDARY_MODES = ("bootstrap", "influence", "cut", "same_z")
 
@@ -65,10 +70,19 @@ class AgentConfig:
             y = r + gamma V(s^{i+1}_1, E(tau^i))), ``cut`` (LILI no influence: y = r) or
             ``same_z`` (a public re-implementation's reading of no influence: bootstrap with
             the unchanged z^i). Set by the agent; override only to compare readings.
-        buffer_capacity: interactions kept (ring buffer).
+        buffer_capacity: interactions kept (ring buffer); at least ``warmup_interactions``
+            (the normalisation statistics are fitted on every warm-up interaction, so a
+            smaller ring would forget some before they are used) and ``history + 1`` (the
+            encoder's window plus the interaction it is applied to).
         checkpoint_every: interactions between checkpoints in a run folder.
         extra: options of one agent, keyed by its name, e.g. ``{"slac": {"model_every": 2}}``
-            (see ``lili.agents.slac.SLAC_OPTIONS``); each agent checks its own entry.
+            (see ``lili.agents.slac.SLAC_OPTIONS``). This class checks the shape (agent
+            name -> mapping of options); ``lili.agents.check_extra`` checks every entry's
+            names and values, whichever agent the config is for.
+
+    Every field is checked on construction: a value of the wrong type (``gamma=False``,
+    ``hidden=[256.5]``), out of range, NaN or infinite raises ValueError naming the field,
+    the value and what is allowed. NumPy scalars are accepted and stored as Python numbers.
     """
 
     gamma: float = 0.99
@@ -100,51 +114,39 @@ class AgentConfig:
     extra: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        def bad(name: str, allowed: str) -> ValueError:
-            value = getattr(self, name)
-            return ValueError(f"config {name}={value!r} is invalid; allowed: {allowed}")
-
-        for name in ("gamma",):
-            v = getattr(self, name)
-            if not isinstance(v, (int, float)) or not 0 <= v < 1:
-                raise bad(name, "a number in [0, 1)")
-        for name in ("tau",):
-            v = getattr(self, name)
-            if not isinstance(v, (int, float)) or not 0 < v <= 1:
-                raise bad(name, "a number in (0, 1]")
-        for name in ("lr_actor", "lr_critic", "lr_alpha", "lr_encoder", "lr_decoder",
-                     "updates_per_step", "init_alpha"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
-                raise bad(name, "a number > 0")
-        for name in ("critic_to_encoder", "rep_weight"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or v < 0:
-                raise bad(name, "a number >= 0")
-        for name, low in (("latent_dim", 1), ("history", 1), ("batch_interactions", 1),
-                          ("per_interaction", 1), ("warmup_interactions", 2),
-                          ("buffer_capacity", 2), ("checkpoint_every", 1)):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < low:
-                raise bad(name, f"an integer >= {low}")
+        for name, (ok, allowed) in _NUMBERS.items():
+            _set(self, name, _number(self, name, ok, allowed))
+        for name, low in _INTEGERS.items():
+            _set(self, name, _integer(self, name, low))
+        if self.target_entropy is not None:
+            _set(self, "target_entropy", _number(self, "target_entropy", _ANY,
+                                                 "a finite number or null (= -|A|)"))
+        if self.encoder_transitions is not None:
+            _set(self, "encoder_transitions",
+                 _integer(self, "encoder_transitions", 1, " or null (= all)"))
+        # The buffer must hold the warm-up interactions (the normalisation statistics and the
+        # first updates are fitted on all of them) and the encoder's window of ``history``
+        # interactions plus the one it is applied to.
+        low = max(self.warmup_interactions, self.history + 1)
+        if self.buffer_capacity < low:
+            raise _bad(self, "buffer_capacity", f"an integer >= {low} (it must hold the "
+                       f"warmup_interactions={self.warmup_interactions} and history + 1 = "
+                       f"{self.history + 1} interactions)")
         for name in ("hidden", "enc_hidden"):
             v = getattr(self, name)
             if not isinstance(v, (tuple, list)) or not v or not all(
-                isinstance(h, int) and not isinstance(h, bool) and h > 0 for h in v
+                isinstance(h, numbers.Integral) and not isinstance(h, bool) and h > 0 for h in v
             ):
-                raise bad(name, "a non-empty list of positive integers")
-            object.__setattr__(self, name, tuple(v))
+                raise _bad(self, name, "a non-empty list of positive integers")
+            _set(self, name, tuple(int(h) for h in v))
         for name in ("phase_feature", "normalize", "target_encoder"):
             if not isinstance(getattr(self, name), bool):
-                raise bad(name, "true or false")
-        et = self.encoder_transitions
-        if et is not None and (isinstance(et, bool) or not isinstance(et, int) or et < 1):
-            raise bad("encoder_transitions", "an integer >= 1 or null (= all)")
-        te = self.target_entropy
-        if te is not None and (isinstance(te, bool) or not isinstance(te, (int, float))):
-            raise bad("target_entropy", "a number or null (= -|A|)")
-        if self.boundary is not None and self.boundary not in BOUNDARY_MODES:
-            raise bad("boundary", ", ".join(BOUNDARY_MODES) + " or null (the agent's default)")
+                raise _bad(self, name, "true or false")
+        if self.boundary is not None and (not isinstance(self.boundary, str)
+                                          or self.boundary not in BOUNDARY_MODES):
+            raise _bad(self, "boundary", ", ".join(BOUNDARY_MODES) + " or null (the agent's "
+                       "default)")
+        _check_extra_shape(self.extra)
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> AgentConfig:
@@ -169,6 +171,65 @@ class AgentConfig:
         return dataclasses.replace(self, **changes)
 
 
+def _bad(config: AgentConfig, name: str, allowed: str) -> ValueError:
+    return ValueError(f"config {name}={getattr(config, name)!r} is invalid; allowed: {allowed}")
+
+
+def _set(config: AgentConfig, name: str, value: Any) -> None:
+    object.__setattr__(config, name, value)  # the dataclass is frozen
+
+
+def _ANY(v: float) -> bool:
+    return True
+
+
+def _number(config: AgentConfig, name: str, ok: Callable[[float], bool], allowed: str) -> float:
+    """The field as a Python number, or ValueError; bools, NaN and infinities are refused."""
+    v = getattr(config, name)
+    if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(v) \
+            or not ok(v):
+        raise _bad(config, name, allowed)
+    return v if isinstance(v, (int, float)) else float(v)
+
+
+def _integer(config: AgentConfig, name: str, low: int, also: str = "") -> int:
+    v = getattr(config, name)
+    if isinstance(v, bool) or not isinstance(v, numbers.Integral) or v < low:
+        raise _bad(config, name, f"an integer >= {low}{also}")
+    return int(v)
+
+
+_NUMBERS: dict[str, tuple[Callable[[float], bool], str]] = {
+    "gamma": (lambda v: 0 <= v < 1, "a number in [0, 1)"),
+    "tau": (lambda v: 0 < v <= 1, "a number in (0, 1]"),
+    **{name: ((lambda v: v > 0), "a finite number > 0") for name in (
+        "lr_actor", "lr_critic", "lr_alpha", "lr_encoder", "lr_decoder", "updates_per_step",
+        "init_alpha")},
+    **{name: ((lambda v: v >= 0), "a finite number >= 0") for name in (
+        "critic_to_encoder", "rep_weight")},
+}
+"""Number fields: (test, what is allowed). Every number must also be finite and not a bool."""
+
+_INTEGERS: dict[str, int] = {
+    "latent_dim": 1, "history": 1, "batch_interactions": 1, "per_interaction": 1,
+    "warmup_interactions": 2, "buffer_capacity": 2, "checkpoint_every": 1,
+}
+"""Integer fields and their lower bounds (``buffer_capacity`` has a further one)."""
+
+
+def _check_extra_shape(extra: Any) -> None:
+    """``extra`` maps agent names to mappings of options; which names and options an agent
+    knows is checked by ``lili.agents.check_extra`` (this module sits below the agents)."""
+    if not isinstance(extra, dict):
+        raise ValueError(f"config extra={extra!r} is invalid; allowed: a mapping of agent name "
+                         "to its options, e.g. {slac: {model_every: 2}}")
+    for key, options in extra.items():
+        if not isinstance(key, str) or not isinstance(options, dict) or not all(
+                isinstance(k, str) for k in options):
+            raise ValueError(f"config extra.{key}={options!r} is invalid; allowed: a mapping of "
+                             "option name: value")
+
+
 def extra_options(config: AgentConfig, key: str, defaults: dict[str, Any],
                   label: str) -> dict[str, Any]:
     """An agent's own options: ``config.extra[key]`` over ``defaults``, keys checked.
@@ -187,18 +248,84 @@ def extra_options(config: AgentConfig, key: str, defaults: dict[str, Any],
     return {**defaults, **raw}
 
 
-def load_config(path: str | Path) -> AgentConfig:
-    """Read an AgentConfig from a YAML file (only the fields to change need to be given)."""
-    p = Path(path)
-    if not p.is_file():
-        raise ValueError(f"config file {str(p)!r} does not exist")
+class _Loader(yaml.SafeLoader):
+    """PyYAML's safe loader, with two changes a user writing a config expects.
+
+    ``1e-3`` is a number (YAML 1.2; PyYAML follows YAML 1.1, where a float needs a dot, so
+    ``lr_actor: 1e-3`` would be the string "1e-3"), and a key given twice in one mapping is an
+    error (PyYAML silently keeps the last one).
+    """
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        seen: set[Any] = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            try:
+                duplicate = key in seen
+            except TypeError:  # an unhashable key: PyYAML's own error follows
+                continue
+            if duplicate:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"the key {key!r} is given twice", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep)
+
+
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float", re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)"
+                                          r"[eE][-+]?[0-9]+$"), list("-+0123456789."))
+
+
+def yaml_value(text: str) -> Any:
+    """Parse one YAML value (``--env-kwarg KEY=VALUE``) with the rules of :func:`read_yaml`."""
     try:
-        data = yaml.safe_load(p.read_text()) or {}
+        return yaml.load(text, Loader=_Loader)  # noqa: S506 - _Loader is a SafeLoader
     except yaml.YAMLError as e:
-        raise ValueError(f"config file {str(p)!r} is not valid YAML: {e}") from None
+        raise ValueError(f"{text!r} is not a valid YAML value ({_yaml_problem(e)})") from None
+
+
+def _yaml_problem(e: yaml.YAMLError) -> str:
+    """One line: where and what (PyYAML's own message spans several lines with a snippet)."""
+    if isinstance(e, yaml.MarkedYAMLError):
+        mark = e.problem_mark or e.context_mark
+        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
+        context = f" ({e.context})" if e.context else ""
+        return f"{where}{e.problem or 'malformed'}{context}"
+    return str(e).splitlines()[0] if str(e) else type(e).__name__
+
+
+def read_yaml(path: str | Path, what: str = "config file") -> Any:
+    """Read a YAML file; ValueError with one line naming the file and, for malformed YAML, the
+    line and column (missing file, folder, not UTF-8 text, malformed YAML)."""
+    p = Path(path)
+    if p.is_dir():
+        raise ValueError(f"{what} {str(p)!r} is a folder; allowed: a YAML file")
+    if not p.is_file():
+        raise ValueError(f"{what} {str(p)!r} does not exist")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ValueError(f"{what} {str(p)!r} is not UTF-8 text; allowed: a YAML file") from None
+    except OSError as e:
+        raise ValueError(f"{what} {str(p)!r} cannot be read ({e.strerror})") from None
+    try:
+        return yaml.load(text, Loader=_Loader)  # noqa: S506 - _Loader is a SafeLoader
+    except yaml.YAMLError as e:
+        raise ValueError(f"{what} {str(p)!r} is not valid YAML: {_yaml_problem(e)}") from None
+
+
+def load_config(path: str | Path) -> AgentConfig:
+    """Read an AgentConfig from a YAML file (only the fields to change need to be given).
+
+    Raises ValueError with one line naming the file and the bad value.
+    """
+    data = read_yaml(path)
+    if data is None:
+        data = {}
     if not isinstance(data, dict):
-        raise ValueError(f"config file {str(p)!r} must hold a mapping of field: value")
+        raise ValueError(f"config file {str(path)!r} must hold a mapping of field: value; got "
+                         f"{type(data).__name__}")
     try:
         return AgentConfig.from_dict(data)
-    except TypeError as e:
-        raise ValueError(f"config file {str(p)!r}: {e}") from None
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"config file {str(path)!r}: {e}") from None

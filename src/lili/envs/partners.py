@@ -17,7 +17,9 @@ __all__ = ["MajorityHistory", "noisy_step", "check_partner_options"]
 
 def check_partner_options(step_noise: float, history: int) -> None:
     """Validate the common partner options; raise ``ValueError`` naming the bad value."""
-    if not np.isfinite(step_noise) or step_noise < 0:
+    if isinstance(step_noise, bool) or not isinstance(step_noise, (int, float, np.integer,
+                                                                  np.floating)) \
+            or not np.isfinite(step_noise) or step_noise < 0:
         raise ValueError(f"step_noise={step_noise!r} is invalid; allowed: a finite number >= 0")
     if isinstance(history, bool) or not isinstance(history, (int, np.integer)) or history < 1:
         raise ValueError(f"history={history!r} is invalid; allowed: an integer >= 1")
