@@ -1,1 +1,48 @@
-"""Small repeated-interaction envs whose best greedy and influencing policies are known."""
+"""The influence suite: small repeated-interaction envs whose best greedy and best influencing
+policies are known by construction, with those policies scripted next to each env.
+
+- ``lili/InfluenceDrift-v0`` (:mod:`.drift`): a goal that drifts toward the side where the ego
+  ended. Knowing the goal is worth nothing in the long run; holding it near the start is worth
+  0.2 per interaction.
+- ``lili/InfluenceSwitch-v0`` (:mod:`.switch`): the partner's next mode is a known function of
+  its mode and of the direction of the ego's last action. Knowing the mode is worth 1.05,
+  steering it to the cheap mode 0.45 more.
+- ``lili/PointMass-v0`` (the paper's task; scripted policies in :mod:`.point_mass`).
+
+:data:`SUITE` maps each env id to its scripted policies (name -> factory(seed) -> policy) and
+their known long-run returns per interaction. Each env module's docstring gives the rules and
+derives those returns; ``benchmarks/influence.py`` measures them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from lili.envs.influence import drift, point_mass, switch
+from lili.envs.influence.drift import InfluenceDriftEnv
+from lili.envs.influence.scripted import Rollout, ScriptedPolicy, play
+from lili.envs.influence.switch import InfluenceSwitchEnv
+
+__all__ = ["SUITE", "POLICIES", "InfluenceDriftEnv", "InfluenceSwitchEnv", "Rollout",
+           "ScriptedPolicy", "play"]
+
+POLICIES = ("no-information", "greedy", "influencer")
+
+SUITE: dict[str, tuple[dict[str, Callable[[int], ScriptedPolicy]], dict[str, float]]] = {
+    "lili/InfluenceDrift-v0": (drift.SCRIPTED, drift.KNOWN_RETURNS),
+    "lili/InfluenceSwitch-v0": (switch.SCRIPTED, switch.KNOWN_RETURNS),
+    "lili/PointMass-v0": (point_mass.SCRIPTED, point_mass.KNOWN_RETURNS),
+}
+
+
+def make_scripted(env_id: str, name: str, seed: int = 0) -> Any:
+    """The scripted policy ``name`` (one of :data:`POLICIES`) of the suite's env ``env_id``."""
+    if env_id not in SUITE:
+        raise ValueError(f"env {env_id!r} has no scripted policies; allowed: {', '.join(SUITE)}")
+    if name not in POLICIES:
+        raise ValueError(f"unknown scripted policy {name!r}; allowed: {', '.join(POLICIES)}")
+    return SUITE[env_id][0][name](seed)
+
+
+__all__ += ["make_scripted"]

@@ -1,0 +1,144 @@
+"""The influence suite: rules, registration, the contract, and the scripted policies' ranking."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import lili.envs  # noqa: F401
+from lili.envs import resolve_env_id
+from lili.envs.checker import check_env
+from lili.envs.influence import SUITE, InfluenceDriftEnv, InfluenceSwitchEnv, make_scripted, play
+from lili.envs.influence.drift import GOALS
+from lili.envs.influence.switch import LEFT, MIDDLE, NEXT_MODE, RIGHT
+
+NEW_ENVS = {"influence-drift": "lili/InfluenceDrift-v0",
+            "influence-switch": "lili/InfluenceSwitch-v0"}
+
+
+def _returns(env_id: str, n: int, last: int, seed: int = 0) -> dict[str, float]:
+    return {name: play(gym.make(env_id), make_scripted(env_id, name, seed), n, seed)
+            .last(last).mean_return() for name in ("no-information", "greedy", "influencer")}
+
+
+@pytest.mark.parametrize("alias, env_id", sorted(NEW_ENVS.items()))
+def test_registered_and_pass_the_checkers(alias, env_id) -> None:
+    assert resolve_env_id(alias) == env_id
+    check_env(gym.make(env_id))
+    # ... and from the shell, as users run it.
+    out = subprocess.run([sys.executable, "-m", "lili.cli", "check-env", alias],
+                         capture_output=True, text=True)
+    assert out.returncode == 0 and "passes" in out.stdout, out.stderr
+
+
+def test_drift_scripted_policies_meet_their_derived_returns() -> None:
+    r = _returns("lili/InfluenceDrift-v0", 60, 50)
+    known = SUITE["lili/InfluenceDrift-v0"][1]
+    for name, value in r.items():
+        assert value == pytest.approx(known[name], abs=1e-6), name
+    # Influence pays; knowing the goal alone does not (greedy = the best fixed trajectory).
+    assert r["influencer"] >= r["greedy"] + 0.15
+    assert r["greedy"] == pytest.approx(r["no-information"])
+
+
+def test_switch_scripted_policies_meet_their_derived_returns() -> None:
+    r = _returns("lili/InfluenceSwitch-v0", 60, 50)
+    known = SUITE["lili/InfluenceSwitch-v0"][1]
+    for name, value in r.items():
+        assert value == pytest.approx(known[name], abs=0.01), name
+    assert r["influencer"] >= r["greedy"] + 0.4
+    assert r["greedy"] >= r["no-information"] + 1.0
+
+
+def test_point_mass_scripted_influencer_beats_greedy_beats_no_information() -> None:
+    r = _returns("lili/PointMass-v0", 120, 100)
+    assert r["influencer"] == pytest.approx(SUITE["lili/PointMass-v0"][1]["influencer"], abs=0.01)
+    assert r["no-information"] == pytest.approx(-5.01, abs=0.05)
+    # Greedy's target random-walks round the circle, so over 100 interactions its mean depends
+    # on where the walk went; it cannot reach the influencer's cheapest targets on average.
+    assert r["influencer"] >= r["greedy"] + 0.05
+    assert r["greedy"] >= r["no-information"] + 3.0
+
+
+def test_drift_rules() -> None:
+    env = InfluenceDriftEnv()
+    obs, info = env.reset(seed=0)
+    env.partner.index = 4  # g = +0.125
+    obs, info = env.reset()
+    assert obs.tolist() == [0.0] and info["strategy"][0] == pytest.approx(0.125)
+    rewards = []
+    for a in (1.0, 1.0, 1.0, 1.0):  # run right: x = 0.5, 1, 1, 1
+        obs, r, term, trunc, info = env.step(np.array([a], np.float32))
+        rewards.append(r)
+    assert not term and trunc and env.t == 4
+    assert rewards == pytest.approx([-0.375, -0.875, -0.875, -0.875])
+    assert env.partner.goal() == pytest.approx(0.375)  # ended right of 0: one step right
+    env.reset()
+    for _ in range(4):
+        env.step(np.array([-1.0], np.float32))
+    assert env.partner.goal() == pytest.approx(0.125)  # ended left: one step left
+    # Clipped at the outermost goals.
+    env.partner.index = 0
+    env.reset()
+    for _ in range(4):
+        env.step(np.array([-1.0], np.float32))
+    assert env.partner.goal() == GOALS[0]
+
+
+@pytest.mark.parametrize("mode, last_action, nxt", [
+    (LEFT, 0.0, MIDDLE), (LEFT, -0.5, RIGHT), (LEFT, 0.5, MIDDLE),
+    (MIDDLE, 0.05, RIGHT), (MIDDLE, -0.2, MIDDLE), (MIDDLE, 0.2, LEFT),
+    (RIGHT, -0.1, LEFT), (RIGHT, -0.11, LEFT), (RIGHT, 0.11, MIDDLE),
+])
+def test_switch_rules(mode, last_action, nxt) -> None:
+    env = InfluenceSwitchEnv()
+    env.reset(seed=0)
+    env.partner.mode = mode
+    env.reset()
+    for _ in range(3):
+        env.step(np.array([0.3], np.float32))  # earlier actions do not matter
+    *_, trunc, info = env.step(np.array([last_action], np.float32))
+    assert trunc
+    assert env.partner.mode == nxt == NEXT_MODE[(mode, int(np.sign(last_action))
+                                                 if abs(last_action) > 0.1 else 0)]
+
+
+def test_reset_seed_replays_and_the_first_strategy_comes_from_the_seed() -> None:
+    for cls in (InfluenceDriftEnv, InfluenceSwitchEnv):
+        firsts = {cls().reset(seed=s)[1]["strategy_id"] for s in range(20)}
+        assert len(firsts) >= 3
+        a = play(cls(), lambda o, i: np.array([0.4], np.float32), 5, seed=7)
+        b = play(cls(), lambda o, i: np.array([0.4], np.float32), 5, seed=7)
+        assert a.returns.tolist() == b.returns.tolist()
+        assert a.strategy_ids.tolist() == b.strategy_ids.tolist()
+
+
+def test_render() -> None:
+    env = gym.make("lili/InfluenceSwitch-v0", render_mode="rgb_array")
+    env.reset(seed=0)
+    a = env.render()
+    env.step(np.array([1.0], np.float32))
+    b = env.render()
+    assert a.shape == (40, 200, 3) and a.dtype == np.uint8 and (a != b).any()
+
+
+@pytest.mark.parametrize("cls, kwargs, match", [
+    (InfluenceDriftEnv, {"horizon": 2}, "horizon=2"),
+    (InfluenceDriftEnv, {"horizon": 4.0}, "horizon=4.0"),
+    (InfluenceSwitchEnv, {"horizon": 3}, "horizon=3.*integer >= 4"),
+    (InfluenceSwitchEnv, {"render_mode": "human"}, "render_mode='human'"),
+])
+def test_bad_kwargs(cls, kwargs, match) -> None:
+    with pytest.raises(ValueError, match=match):
+        cls(**kwargs)
+
+
+def test_make_scripted_rejects_unknown_names() -> None:
+    with pytest.raises(ValueError, match="'lili/Nope-v0'.*allowed: lili/InfluenceDrift-v0"):
+        make_scripted("lili/Nope-v0", "greedy")
+    with pytest.raises(ValueError, match="'smart'.*allowed: no-information, greedy, influencer"):
+        make_scripted("lili/InfluenceDrift-v0", "smart")
