@@ -153,6 +153,8 @@ ENV_ALIASES: dict[str, str] = {
     "lunar-lander": "lili/LunarLander-v0",
     "driving-steer": "lili/DrivingSteer-v0",
     "air-hockey": "lili/AirHockey-v0",
+    "influence-drift": "lili/InfluenceDrift-v0",
+    "influence-switch": "lili/InfluenceSwitch-v0",
 }
 
 
@@ -178,6 +180,8 @@ def register_envs() -> None:
         "lili/LunarLander-v0": "lili.envs.lunar_lander:LunarLanderEnv",
         "lili/DrivingSteer-v0": "lili.envs.driving_steer:DrivingSteerEnv",
         "lili/AirHockey-v0": "lili.envs.air_hockey:AirHockeyEnv",
+        "lili/InfluenceDrift-v0": "lili.envs.influence:InfluenceDriftEnv",
+        "lili/InfluenceSwitch-v0": "lili.envs.influence:InfluenceSwitchEnv",
     }
     for env_id, entry in specs.items():
         if env_id not in gym.registry:
