@@ -1,4 +1,4 @@
-"""InteractionBuffer: interactions stored in the order they happened.
+"""InteractionBuffer: interactions stored in the order they happened, on the device.
 
 Storage is a ring of ``capacity`` interactions, each padded to the horizon H with a ``valid``
 mask, plus each interaction's successor's first observation (what the critic bootstraps from at
@@ -13,13 +13,14 @@ latent needs: tau^{k-N..k-1} (encoder input for z^k) and tau^{k-N+1..k} (for z^{
 
 from __future__ import annotations
 
-from typing import Any
+from functools import partial
+from typing import Any, TypedDict
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["InteractionBuffer", "sample", "buffer_nbytes", "check_buffer_fits"]
+__all__ = ["InteractionBuffer", "sample", "buffer_nbytes", "check_buffer_fits", "Batch", "Window"]
 
 FIELDS = ("obs", "act", "rew", "next_obs", "valid")
 
@@ -59,24 +60,72 @@ def check_buffer_fits(capacity: int, horizon: int, obs_dim: int, act_dim: int,
     return need
 
 
+class Window(TypedDict, total=False):
+    """Interactions k-N .. k as arrays [..., N + 1, S, ...] (S = H or the sampled steps)."""
+
+    obs: jax.Array
+    act: jax.Array
+    rew: jax.Array
+    next_obs: jax.Array
+    valid: jax.Array
+    weight: jax.Array
+    t: jax.Array
+    last: jax.Array
+
+
+class Batch(TypedDict, total=False):
+    """A training batch of :func:`sample`: transitions [B, M, ...] of interactions k."""
+
+    obs: jax.Array
+    act: jax.Array
+    rew: jax.Array
+    next_obs: jax.Array
+    t: jax.Array
+    last: jax.Array
+    next_first_obs: jax.Array
+    index: jax.Array
+    window: Window
+
+
+@partial(jax.jit, donate_argnums=0)
+def _write(arrays: dict[str, jax.Array], slot: jax.Array,
+           row: dict[str, jax.Array]) -> dict[str, jax.Array]:
+    # Donated: the device arrays are updated in place, so adding an interaction costs its own
+    # size, not the buffer's.
+    return {k: v.at[slot].set(row[k]) for k, v in arrays.items()}
+
+
+@partial(jax.jit, static_argnames=("steps",))
+def _window(arrays: dict[str, jax.Array], count: jax.Array, idx: jax.Array,
+            steps: int | None) -> Window:
+    out = _gather_window(arrays, count, idx, None, None)
+    out["weight"] = pooling_weights(out["valid"], out["last"], steps)
+    return out
+
+
 class InteractionBuffer:
-    """Host-side storage of whole interactions (see the module docstring)."""
+    """Storage of whole interactions on the device (see the module docstring).
+
+    ``arrays`` are JAX arrays that the fused update block reads as they are; :meth:`add` writes
+    one interaction into them inside a jitted, donated update.
+    """
 
     def __init__(self, capacity: int, horizon: int, obs_dim: int, act_dim: int) -> None:
-        if capacity < 2:
-            raise ValueError(f"buffer capacity={capacity} is invalid; allowed: an integer >= 2")
+        if isinstance(capacity, bool) or not isinstance(capacity, (int, np.integer)) \
+                or capacity < 2:
+            raise ValueError(f"buffer capacity={capacity!r} is invalid; allowed: an integer >= 2")
         check_buffer_fits(capacity, horizon, obs_dim, act_dim)
         self.capacity, self.horizon = int(capacity), int(horizon)
         self.obs_dim, self.act_dim = int(obs_dim), int(act_dim)
         c, h = self.capacity, self.horizon
-        self.arrays: dict[str, np.ndarray] = {
-            "obs": np.zeros((c, h, obs_dim), np.float32),
-            "act": np.zeros((c, h, act_dim), np.float32),
-            "rew": np.zeros((c, h), np.float32),
-            "next_obs": np.zeros((c, h, obs_dim), np.float32),
-            "valid": np.zeros((c, h), bool),
-            "length": np.zeros((c,), np.int32),
-            "next_first_obs": np.zeros((c, obs_dim), np.float32),
+        self.arrays: dict[str, jax.Array] = {
+            "obs": jnp.zeros((c, h, obs_dim), jnp.float32),
+            "act": jnp.zeros((c, h, act_dim), jnp.float32),
+            "rew": jnp.zeros((c, h), jnp.float32),
+            "next_obs": jnp.zeros((c, h, obs_dim), jnp.float32),
+            "valid": jnp.zeros((c, h), bool),
+            "length": jnp.zeros((c,), jnp.int32),
+            "next_first_obs": jnp.zeros((c, obs_dim), jnp.float32),
         }
         self.count = 0
 
@@ -89,18 +138,20 @@ class InteractionBuffer:
         n = len(traj["rew"])
         if not 1 <= n <= self.horizon:
             raise ValueError(f"interaction length {n} is outside 1..{self.horizon}")
-        slot = self.count % self.capacity
-        a = self.arrays
+        row = {}
         for key in ("obs", "act", "rew", "next_obs"):
-            a[key][slot] = 0
-            a[key][slot, :n] = traj[key]
-        a["valid"][slot] = np.arange(self.horizon) < n
-        a["length"][slot] = n
-        a["next_first_obs"][slot] = next_first_obs
+            v = np.asarray(traj[key], np.float32)
+            pad = np.zeros((self.horizon, *v.shape[1:]), np.float32)
+            pad[:n] = v
+            row[key] = pad
+        row["valid"] = np.arange(self.horizon) < n
+        row["length"] = np.int32(n)
+        row["next_first_obs"] = np.asarray(next_first_obs, np.float32)
+        self.arrays = _write(self.arrays, np.int32(self.count % self.capacity), row)
         self.count += 1
         return self.count - 1
 
-    def window(self, end: int, n: int, steps: int | None = None) -> dict[str, np.ndarray]:
+    def window(self, end: int, n: int, steps: int | None = None) -> Window:
         """Interactions end-n+1 .. end as [n, H, ...] arrays (missing ones fully masked), with
         each step's index ``t``, ``last`` flag and pooling ``weight``.
 
@@ -110,40 +161,60 @@ class InteractionBuffer:
         (S - 1)/S. Plain weights would give the last step 1/H at acting time against 1/S in
         training, a shift of the latent that measurably hurt (README example: 0.96 -> 0.5).
         """
-        idx = np.arange(end - n + 1, end + 1)
-        out = _gather_window(self.arrays, self.count, idx, None, None)
-        out["weight"] = pooling_weights(out["valid"], out["last"], steps)
-        return out
+        idx = np.arange(end - n + 1, end + 1, dtype=np.int32)
+        return _window(self.arrays, np.int32(self.count), idx, steps)
+
+    def last_next_obs(self, index: int) -> np.ndarray:
+        """The final observation of interaction ``index`` (still stored)."""
+        slot = index % self.capacity
+        length = int(self.arrays["length"][slot])
+        return np.asarray(self.arrays["next_obs"][slot, length - 1])
+
+    def stored(self, index: int) -> bool:
+        """Whether interaction ``index`` is still in the ring."""
+        return self.count - self.capacity <= index < self.count
 
     def state_dict(self) -> dict[str, Any]:
-        """Arrays for a checkpoint (only the filled slots)."""
+        """Arrays for a checkpoint (only the filled slots), as NumPy."""
         filled = min(self.count, self.capacity)
-        d: dict[str, Any] = {k: v[:filled] for k, v in self.arrays.items()}
+        d: dict[str, Any] = {k: np.asarray(v[:filled]) for k, v in self.arrays.items()}
         d["count"] = np.array(self.count)
         return d
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
-        filled = min(int(d["count"]), self.capacity)
+        """Restore :meth:`state_dict`; ValueError naming the field when shapes do not fit."""
+        try:
+            count = int(d["count"])
+        except (KeyError, TypeError, ValueError):
+            raise ValueError("checkpoint buffer has no valid 'count'") from None
+        if count < 0:
+            raise ValueError(f"checkpoint buffer count={count} is invalid")
+        filled = min(count, self.capacity)
+        new = {}
         for k, v in self.arrays.items():
+            if k not in d:
+                raise ValueError(f"checkpoint buffer has no field {k!r}")
             if d[k].shape[1:] != v.shape[1:] or d[k].shape[0] != filled:
                 raise ValueError(f"checkpoint buffer field {k!r} has shape {d[k].shape}; "
                                  f"expected ({filled}, {', '.join(map(str, v.shape[1:]))})")
-            v[:filled] = d[k]
-        self.count = int(d["count"])
+            new[k] = v.at[:filled].set(jnp.asarray(d[k], v.dtype))
+        self.arrays = new
+        self.count = count
 
 
 def pooling_weights(valid, last, steps: int | None):
     """Weights of a full window's steps in the encoder's mean (see ``InteractionBuffer.window``).
 
-    Works on NumPy and JAX arrays alike.
+    Works on NumPy and JAX arrays alike (JAX inside jit).
     """
+    xp = np if isinstance(valid, np.ndarray) else jnp
     valid_f = valid.astype(np.float32)
     if steps is None:
         return valid_f
     last_f = last.astype(np.float32)
     early = valid_f - last_f
     n_early = early.sum(-1, keepdims=True)
-    return last_f + early * (steps - 1) / np.maximum(n_early, 1.0)
+    return last_f + early * (steps - 1) / xp.maximum(n_early, 1.0)
 
 
 def _gather_window(arrays: dict[str, jax.Array], count: jax.Array, idx: jax.Array,
@@ -187,7 +258,7 @@ def sample(
     per_interaction: int,
     history: int = 0,
     window_steps: int | None = None,
-) -> dict[str, jax.Array]:
+) -> Batch:
     """Sample a batch (pure JAX; see the module docstring).
 
     ``history`` = N: how many preceding interactions the latent needs (0 for agents without a

@@ -8,15 +8,51 @@ import gymnasium as gym
 import jax
 import numpy as np
 
-from lili.agents.sac import SAC, LatentState
+from lili.agents.base import Agent, check_seed
 from lili.buffer import InteractionBuffer
-from lili.train import rollout
+from lili.train import Interaction, rollout
 
-__all__ = ["evaluate"]
+__all__ = ["evaluate", "Episodes"]
+
+
+class Episodes:
+    """Plays consecutive interactions of a trained agent on an env, without learning.
+
+    The acting state is carried exactly as in training: z^1 from ``initial_state()``, then
+    after each interaction ``next_state`` of a small buffer holding the last N + 1
+    interactions, and within an interaction the state each step returns. Used by
+    :func:`evaluate` and by step-by-step drivers (the play page, videos).
+    """
+
+    def __init__(self, agent: Any, env: gym.Env, seed: int, deterministic: bool = True) -> None:
+        self.agent, self.env, self.deterministic = agent, env, deterministic
+        self.buffer = InteractionBuffer(max(2, agent.history + 1), agent.horizon, agent.obs_dim,
+                                        agent.act_dim)
+        self.key = jax.random.PRNGKey(seed)
+        self.obs, self.info = env.reset(seed=seed)
+        self.acting = agent.initial_state()
+        self.index = 0
+
+    def play(self, on_step: Any = None) -> Interaction:
+        """Play the next interaction; ``on_step(obs, t)`` is called before every step."""
+        agent, k = self.agent, jax.random.fold_in(self.key, self.index)
+
+        def act(o, s):
+            if on_step is not None:
+                on_step(o, int(s.t))
+            return agent.act(o, s, jax.random.fold_in(k, int(s.t)), self.deterministic)
+
+        done = rollout(self.env, self.obs, self.info, act, self.acting, agent.scale_action,
+                       agent.horizon)
+        self.obs, self.info = self.env.reset()
+        self.buffer.add(done["traj"], self.obs)
+        self.acting = agent.next_state(self.buffer)
+        self.index += 1
+        return done
 
 
 def evaluate(
-    agent: SAC,
+    agent: Agent,
     env: gym.Env | None = None,
     n_interactions: int = 100,
     seed: int | None = None,
@@ -37,25 +73,14 @@ def evaluate(
             or n_interactions < 1:
         raise ValueError(f"n_interactions={n_interactions!r} is invalid; allowed: an integer >= 1")
     env = agent.env if env is None else agent._wrap(env)
-    buf = InteractionBuffer(max(2, agent.history + 1), agent.horizon, agent.obs_dim,
-                            agent.act_dim)
-    obs, info = env.reset(seed=agent.seed if seed is None else seed)
-    state = agent.initial_state()
-    key = jax.random.PRNGKey(0 if seed is None else seed)
+    episodes = Episodes(agent, env, agent.seed if seed is None else check_seed(seed),
+                        deterministic)
+    if seed is None:
+        episodes.key = jax.random.PRNGKey(0)
+    on_step = None if frames is None else (lambda o, t: frames.append(env.render()))
     out: dict[str, list] = {"returns": [], "successes": [], "strategies": [], "strategy_ids": []}
-    for i in range(n_interactions):
-        k = jax.random.fold_in(key, i)
-
-        def act(o, t, k=k, z=state.z):
-            a = agent.policy_action(o, LatentState(z, t), jax.random.fold_in(k, t), deterministic)
-            if frames is not None:
-                frames.append(env.render())
-            return a
-
-        done = rollout(env, obs, info, act, agent.scale_action, agent.horizon)
-        obs, info = env.reset()
-        buf.add(done["traj"], obs)
-        state = agent.next_latent_state(buf)
+    for _ in range(n_interactions):
+        done = episodes.play(on_step)
         out["returns"].append(done["ret"])
         out["successes"].append(done["success"])
         out["strategies"].append(done["strategy"].tolist())

@@ -8,9 +8,9 @@ import flax.linen as nn
 import jax
 import jax.numpy as jnp
 
-__all__ = ["MLP", "Actor", "TwinCritic", "Encoder", "Decoder", "tanh_gaussian"]
+from lili.dists import soft_clip_log_std
 
-LOG_STD_MIN, LOG_STD_MAX = -5.0, 2.0
+__all__ = ["MLP", "Actor", "TwinCritic", "Encoder", "Decoder"]
 
 
 class MLP(nn.Module):
@@ -36,21 +36,7 @@ class Actor(nn.Module):
     def __call__(self, x: jax.Array) -> tuple[jax.Array, jax.Array]:
         out = MLP(self.hidden, 2 * self.act_dim)(x)
         mean, log_std = jnp.split(out, 2, axis=-1)
-        # Soft clipping keeps the gradient alive at the bounds (as in SAC implementations).
-        log_std = LOG_STD_MIN + 0.5 * (LOG_STD_MAX - LOG_STD_MIN) * (jnp.tanh(log_std) + 1)
-        return mean, log_std
-
-
-def tanh_gaussian(
-    mean: jax.Array, log_std: jax.Array, key: jax.Array
-) -> tuple[jax.Array, jax.Array]:
-    """Sample a = tanh(u), u ~ N(mean, std); return (a, log pi(a)) with the tanh correction."""
-    std = jnp.exp(log_std)
-    u = mean + std * jax.random.normal(key, mean.shape)
-    logp = -0.5 * (((u - mean) / std) ** 2 + 2 * log_std + jnp.log(2 * jnp.pi))
-    # log(1 - tanh(u)^2) written stably.
-    logp = logp - 2 * (jnp.log(2.0) - u - jax.nn.softplus(-2 * u))
-    return jnp.tanh(u), logp.sum(-1)
+        return mean, soft_clip_log_std(log_std)
 
 
 class TwinCritic(nn.Module):

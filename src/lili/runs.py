@@ -3,16 +3,23 @@
 - ``config.yaml``: the resolved configuration (env id and kwargs, algo, seed, budget, agent).
 - ``metrics.csv``: one row per interaction (return, length, success, strategy, losses, time).
 - ``tb/``: TensorBoard event files (tensorboardX).
-- ``checkpoints/``: the newest checkpoint ``ckpt_<n>/`` (agent, buffer, action log) and
-  ``latest.json`` pointing at it; the pointer is replaced atomically after the checkpoint is
-  complete, so a run killed at any moment loses at most one checkpoint interval.
+- ``checkpoints/``: the newest checkpoint ``ckpt_<n>/``, in two parts written apart: the agent
+  (``agent.msgpack``: parameters, optimiser states, normaliser, config) and the stream
+  (``stream.npz``: replay buffer, action log, wall time), plus ``latest.json`` pointing at it;
+  the pointer is replaced atomically after the checkpoint is complete, so a run killed at any
+  moment loses at most one checkpoint interval.
 - ``summary.json``: final metrics, versions, git commit, wall time.
+
+Resuming (:func:`resume_run`) checks everything it reads (config, pointer, both checkpoint
+parts, and that ``metrics.csv`` still holds the rows the checkpoint logged, unedited) before
+anything in the folder is written.
 """
 
 from __future__ import annotations
 
 import csv
 import json
+import math
 import platform
 import shutil
 import subprocess
@@ -23,22 +30,40 @@ import numpy as np
 import yaml
 
 import lili
-from lili.agents.sac import SAC, CheckpointError
+from lili.agents import CheckpointError, load_agent
+from lili.agents.sac import SAC
+from lili.train import Stream
 
-__all__ = ["RunLogger", "run_dir_for", "load_checkpoint", "METRIC_COLUMNS", "final_mean"]
+__all__ = ["RunLogger", "run_dir_for", "load_checkpoint", "METRIC_COLUMNS", "final_mean",
+           "final_window", "latest_checkpoint", "read_run_config", "metric_columns",
+           "resume_run"]
 
 METRIC_COLUMNS = ("critic_loss", "actor_loss", "alpha", "rep_loss", "q", "entropy")
 
 
 def run_dir_for(out: str | Path, env_id: str, algo: str, seed: int) -> Path:
     """The run folder of (env, algo, seed) under the experiment folder ``out``."""
-    return Path(out) / env_id.split("/")[-1] / algo / f"seed_{seed}"
+    return Path(out) / env_id.split("/")[-1].replace(":", "_") / algo / f"seed_{seed}"
 
 
-def final_mean(values: list[float], frac: float = 0.1) -> float:
-    """Mean over the last ``frac`` of the values (at least one): the paper's final performance."""
-    n = max(1, int(round(len(values) * frac)))
-    return float(np.mean(values[-n:]))
+def final_window(n: int, frac: float = 0.1) -> int:
+    """How many of ``n`` interactions the final performance averages: the last ``frac`` of
+    them, rounded up, at least one (at 15 interactions: 2). The one definition, used by
+    ``summary.json`` and by every report."""
+    return max(1, math.ceil(n * frac - 1e-9))
+
+
+def final_mean(values: list[float] | np.ndarray, frac: float = 0.1) -> float:
+    """Mean over the last ``frac`` of the values (:func:`final_window`): the paper's final
+    performance."""
+    return float(np.mean(np.asarray(values, float)[-final_window(len(values), frac):]))
+
+
+def metric_columns(strategy_dim: int) -> list[str]:
+    """The header of ``metrics.csv`` for an env whose strategy has ``strategy_dim`` entries."""
+    return (["interaction", "return", "length", "success"]
+            + [f"strategy_{j}" for j in range(strategy_dim)]
+            + ["strategy_id", *METRIC_COLUMNS, "wall_time"])
 
 
 def _git_commit() -> str | None:
@@ -60,60 +85,161 @@ def _versions() -> dict[str, str]:
             "numpy": np.__version__}
 
 
+def read_run_config(run_dir: str | Path) -> dict[str, Any]:
+    """The ``config.yaml`` of a run folder; ValueError naming the file when it is missing or
+    not the mapping ``lili train`` writes."""
+    path = Path(run_dir) / "config.yaml"
+    if not path.is_file():
+        raise ValueError(f"{Path(run_dir)} is not a run folder (config.yaml is missing)")
+    try:
+        cfg = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as e:
+        mark = getattr(e, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise ValueError(f"{path} is not valid YAML{where}; restore it or start a new run") \
+            from None
+    keys = ("env", "env_kwargs", "algo", "seed", "interactions", "agent")
+    if not isinstance(cfg, dict) or any(k not in cfg for k in keys):
+        raise ValueError(f"{path} is not a lili run config (it must map {', '.join(keys)})")
+    return cfg
+
+
+def latest_checkpoint(run_dir: str | Path) -> tuple[Path, int]:
+    """(folder, interactions) of the run's newest complete checkpoint; CheckpointError naming
+    the file when there is none or the pointer is corrupt."""
+    root = Path(run_dir) / "checkpoints"
+    pointer = root / "latest.json"
+    if not pointer.is_file():
+        raise CheckpointError(f"{Path(run_dir)} has no checkpoint (checkpoints/latest.json is "
+                              "missing)")
+    try:
+        data = json.loads(pointer.read_text())
+        name, n = data["checkpoint"], data["interactions"]
+        ok = isinstance(name, str) and "/" not in name and isinstance(n, int) and n >= 0
+    except (ValueError, KeyError, TypeError):
+        ok = False
+    if not ok:
+        raise CheckpointError(f"{pointer} is corrupt (expected {{\"checkpoint\": \"ckpt_<n>\", "
+                              "\"interactions\": n}); restore it or start a new run")
+    ck = root / name
+    if not (ck / "agent.msgpack").is_file():
+        raise CheckpointError(f"{pointer} points at {ck}, which holds no agent.msgpack")
+    return ck, n
+
+
+def load_checkpoint(run_dir: str | Path, agent: SAC, stream: Stream) -> int:
+    """Restore ``agent``'s state and ``stream`` from the run's latest checkpoint; return the
+    number of interactions it holds. CheckpointError naming the file on any mismatch."""
+    ck, n = latest_checkpoint(run_dir)
+    loaded = load_agent(ck / "agent.msgpack", agent.env)
+    if loaded.algo != agent.algo:
+        raise CheckpointError(f"{ck} holds a {loaded.algo!r} agent; this run is {agent.algo!r}")
+    if loaded.config != agent.config:
+        raise CheckpointError(f"{ck} was trained with another agent config than {run_dir}")
+    try:
+        with np.load(ck / "stream.npz", allow_pickle=False) as d:
+            parts = dict(d)
+    except Exception:
+        raise CheckpointError(f"{ck / 'stream.npz'} is missing or corrupt") from None
+    stream.load_state_dict(parts, str(ck / "stream.npz"))
+    if stream.count != n or loaded.trained_interactions != n:
+        raise CheckpointError(f"{ck} is inconsistent: latest.json says {n} interactions, the "
+                              f"stream holds {stream.count}, the agent "
+                              f"{loaded.trained_interactions}")
+    agent.state = loaded.state
+    agent.stream = stream
+    return n
+
+
+def _read_rows(path: Path, columns: list[str]) -> list[list[str]]:
+    try:
+        with path.open(newline="") as f:
+            rows = list(csv.reader(f))
+    except OSError as e:
+        raise CheckpointError(f"{path} cannot be read: {e}") from None
+    if not rows or rows[0] != columns:
+        got = rows[0] if rows else "nothing"
+        raise CheckpointError(f"{path} has columns {got}; expected {columns} (was it edited?)")
+    return rows[1:]
+
+
+def _check_logged(path: Path, rows: list[list[str]], stream: Stream, n: int) -> None:
+    """The first ``n`` rows must be interactions 0..n-1 whose returns match the buffer."""
+    if len(rows) < n:
+        raise CheckpointError(f"{path} holds {len(rows)} rows but the checkpoint is at "
+                              f"interaction {n}: rows were deleted; restore the file or start "
+                              "a new run")
+    buf = stream.buffer
+    rew = np.asarray(buf.arrays["rew"]).sum(-1)
+    for j, r in enumerate(rows[:n]):
+        try:
+            index, ret = int(r[0]), float(r[1])
+        except (ValueError, IndexError):
+            raise CheckpointError(f"{path} line {j + 2} is not a number where one belongs "
+                                  f"({r[:2]}); restore the file or start a new run") from None
+        if index != j:
+            raise CheckpointError(f"{path} line {j + 2} is interaction {index}, expected {j}: "
+                                  "rows were deleted or reordered")
+        if buf.stored(j) and not math.isclose(ret, float(rew[j % buf.capacity]),
+                                              rel_tol=1e-4, abs_tol=1e-4):
+            raise CheckpointError(f"{path} line {j + 2} says return {ret}, the checkpoint "
+                                  f"{float(rew[j % buf.capacity]):.6g}: the file was edited")
+
+
+def resume_run(run_dir: str | Path, agent: SAC, stream: Stream,
+               strategy_dim: int) -> int:
+    """Load the run's latest checkpoint into ``agent`` and ``stream`` and check that
+    ``metrics.csv`` still holds what it logged. Writes nothing; returns the interactions done.
+    A run killed before its first checkpoint restarts from 0."""
+    run_dir = Path(run_dir)
+    if not (run_dir / "checkpoints" / "latest.json").exists():
+        return 0
+    n = load_checkpoint(run_dir, agent, stream)
+    path = run_dir / "metrics.csv"
+    _check_logged(path, _read_rows(path, metric_columns(strategy_dim)), stream, n)
+    return n
+
+
 class RunLogger:
-    """Writes one run folder while :func:`lili.train.train` runs (see the module docstring)."""
+    """Writes one run folder while :func:`lili.train.train` runs (see the module docstring).
+
+    Construct it only after every input is validated (:func:`resume_run` for a resume): it
+    writes ``config.yaml``, cuts ``metrics.csv`` back to ``start`` rows and opens TensorBoard.
+    """
 
     def __init__(self, run_dir: Path, config: dict[str, Any], strategy_dim: int,
                  checkpoint_every: int, start: int = 0) -> None:
         self.dir = Path(run_dir)
         self.dir.mkdir(parents=True, exist_ok=True)
         self.checkpoint_every = checkpoint_every
-        (self.dir / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
-        self.columns = (["interaction", "return", "length", "success"]
-                        + [f"strategy_{j}" for j in range(strategy_dim)]
-                        + ["strategy_id", *METRIC_COLUMNS, "wall_time"])
+        self.columns = metric_columns(strategy_dim)
+        self.strategy_dim = strategy_dim
         path = self.dir / "metrics.csv"
-        if start > 0 and path.exists():
-            self._truncate(path, start)
-        else:
-            with path.open("w", newline="") as f:
-                csv.writer(f).writerow(self.columns)
+        rows = _read_rows(path, self.columns)[:start] if start > 0 else []
+        (self.dir / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
+        with path.open("w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(self.columns)
+            w.writerows(rows)
         self._csv_file = path.open("a", newline="")
         self._csv = csv.writer(self._csv_file)
         from tensorboardX import SummaryWriter
 
         # purge_step drops events a killed run wrote after its last checkpoint.
         self.tb = SummaryWriter(str(self.dir / "tb"), purge_step=start if start > 0 else None)
-        self.returns: list[float] = []
-        self.successes: list[float] = []
-        if start > 0:
-            self._reload_history()
+        self.returns = [float(r[1]) for r in rows]
+        success = self.columns.index("success")
+        self.successes = [float(r[success]) for r in rows if r[success] != ""]
 
-    def _truncate(self, path: Path, n: int) -> None:
-        with path.open(newline="") as f:
-            rows = list(csv.reader(f))
-        header, body = rows[0], rows[1:]
-        if header != self.columns:
-            raise CheckpointError(f"{path} has columns {header}; expected {self.columns}")
-        with path.open("w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(header)
-            w.writerows(r for r in body if int(r[0]) < n)
-
-    def _reload_history(self) -> None:
-        with (self.dir / "metrics.csv").open(newline="") as f:
-            for r in csv.DictReader(f):
-                self.returns.append(float(r["return"]))
-                if r["success"] != "":
-                    self.successes.append(float(r["success"]))
-
-    def log(self, row: dict[str, Any], agent: SAC) -> None:
+    def log(self, row: dict[str, Any], agent: SAC, stream: Stream) -> None:
         """Append one interaction's row; checkpoint every ``checkpoint_every`` interactions."""
         i = row["interaction"]
         success = row["success"]
         values = [i, f"{row['return']:.6g}", row["length"],
                   "" if success is None else int(success)]
-        values += [f"{v:.6g}" for v in row["strategy"]]
+        # An env that reports no strategy (or not on every interaction) leaves the cells empty.
+        strategy = [f"{v:.6g}" for v in row["strategy"]][: self.strategy_dim]
+        values += strategy + [""] * (self.strategy_dim - len(strategy))
         values += [row["strategy_id"]]
         values += [f"{row[k]:.6g}" if k in row else "" for k in METRIC_COLUMNS]
         values += [f"{row['wall_time']:.3f}"]
@@ -128,26 +254,19 @@ class RunLogger:
             if k in row:
                 self.tb.add_scalar(f"train/{k}", row[k], i)
         if (i + 1) % self.checkpoint_every == 0:
-            self.checkpoint(agent)
+            self.checkpoint(agent, stream)
 
-    def checkpoint(self, agent: SAC) -> Path:
+    def checkpoint(self, agent: SAC, stream: Stream) -> Path:
         """Write ``checkpoints/ckpt_<n>`` completely, then point ``latest.json`` at it."""
         self.tb.flush()
         root = self.dir / "checkpoints"
-        n = agent.num_interactions
+        n = stream.count
         ck = root / f"ckpt_{n}"
         if ck.exists():
             shutil.rmtree(ck)
         ck.mkdir(parents=True)
         agent.save(ck / "agent.msgpack")
-        np.savez(ck / "buffer.npz", **agent.buffer.state_dict())
-        lengths = np.array([len(a) for a in agent.action_log], np.int32)
-        acts = np.zeros((len(lengths), agent.horizon, agent.act_dim), np.float32)
-        for j, a in enumerate(agent.action_log):
-            acts[j, : len(a)] = a
-        np.savez(ck / "actions.npz", actions=acts, lengths=lengths)
-        (ck / "run.json").write_text(json.dumps({"interactions": n,
-                                                 "wall_time": agent.wall_time}))
+        np.savez(ck / "stream.npz", **stream.state_dict())
         tmp = root / "latest.json.tmp"
         tmp.write_text(json.dumps({"checkpoint": ck.name, "interactions": n}))
         tmp.replace(root / "latest.json")
@@ -156,18 +275,18 @@ class RunLogger:
                 shutil.rmtree(old, ignore_errors=True)
         return ck
 
-    def finish(self, agent: SAC, config: dict[str, Any]) -> dict[str, Any]:
+    def finish(self, agent: SAC, stream: Stream, config: dict[str, Any]) -> dict[str, Any]:
         """Final checkpoint and ``summary.json``."""
-        if agent.num_interactions % self.checkpoint_every != 0:
-            self.checkpoint(agent)
+        if stream.count % self.checkpoint_every != 0:
+            self.checkpoint(agent, stream)
         summary = {
             "env": config["env"],
             "algo": config["algo"],
             "seed": config["seed"],
-            "interactions": agent.num_interactions,
+            "interactions": stream.count,
             "final_return": final_mean(self.returns) if self.returns else None,
             "final_success": final_mean(self.successes) if self.successes else None,
-            "wall_time_s": round(agent.wall_time, 2),
+            "wall_time_s": round(stream.wall_time, 2),
             "versions": _versions(),
             "git_commit": _git_commit(),
         }
@@ -178,42 +297,3 @@ class RunLogger:
     def close(self) -> None:
         self.tb.close()
         self._csv_file.close()
-
-
-def load_checkpoint(run_dir: Path, agent: SAC) -> None:
-    """Restore ``agent`` (state, buffer, action log) from the run folder's latest checkpoint.
-
-    Raises CheckpointError naming the file when anything is missing, corrupt or mismatched.
-    """
-    root = Path(run_dir) / "checkpoints"
-    pointer = root / "latest.json"
-    if not pointer.is_file():
-        raise CheckpointError(f"no checkpoint to resume in {root} (latest.json is missing)")
-    try:
-        ck = root / json.loads(pointer.read_text())["checkpoint"]
-        meta = json.loads((ck / "run.json").read_text())
-    except Exception:
-        raise CheckpointError(f"{pointer} is corrupt or points at a missing checkpoint") from None
-    from lili.agents import load_agent
-
-    loaded = load_agent(ck / "agent.msgpack", agent.env)
-    if loaded.algo != agent.algo:
-        raise CheckpointError(f"{ck} holds a {loaded.algo!r} agent; this run is {agent.algo!r}")
-    if loaded.config != agent.config:
-        raise CheckpointError(f"{ck} was trained with another agent config than {run_dir}")
-    agent.state = loaded.state
-    agent.num_interactions = loaded.num_interactions
-    try:
-        with np.load(ck / "buffer.npz", allow_pickle=False) as d:
-            agent.buffer.load_state_dict(dict(d))
-        with np.load(ck / "actions.npz", allow_pickle=False) as d:
-            acts, lengths = d["actions"], d["lengths"]
-    except CheckpointError:
-        raise
-    except Exception as e:
-        raise CheckpointError(f"{ck} has a corrupt buffer or action log: {e}") from None
-    if len(lengths) != agent.num_interactions or agent.buffer.count != agent.num_interactions:
-        raise CheckpointError(f"{ck} is inconsistent: its parts hold different interaction counts")
-    agent.action_log = [acts[j, :n].copy() for j, n in enumerate(lengths)]
-    agent.wall_time = float(meta.get("wall_time", 0.0))
-    agent._pending = None

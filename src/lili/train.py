@@ -1,9 +1,11 @@
-"""The one training loop for every algorithm.
+"""The one training loop for every algorithm, and the stream of interactions it owns.
 
-For each interaction: act with the current latent (uniform random actions during warm-up), store
+For each interaction: act with the acting state (uniform random actions during warm-up), store
 the interaction, start the next one (its first observation is the boundary target's next state),
-run one fused block of gradient updates, compute the next latent, log, and checkpoint.
+run one fused block of gradient updates, compute the next acting state, log, and checkpoint.
 
+The :class:`Stream` (env, buffer, action log, pending first observation, counters) belongs to
+the loop, not to the agent: the agent is its learnable state and pure functions of it.
 Randomness is derived from (seed, interaction index) rather than carried along, so a run resumed
 from a checkpoint draws exactly the numbers an uninterrupted run draws.
 """
@@ -13,34 +15,42 @@ from __future__ import annotations
 import time
 from collections import deque
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import gymnasium as gym
 import jax
 import numpy as np
 
-from lili.agents.sac import LatentState
+from lili.agents.base import ActingState, Agent, CheckpointError
+from lili.buffer import InteractionBuffer
 
-if TYPE_CHECKING:
-    from lili.agents.sac import SAC
+__all__ = ["train", "rollout", "Interaction", "Stream", "NonFiniteError", "interaction_keys"]
 
-__all__ = ["train", "rollout", "Interaction"]
+
+class NonFiniteError(ValueError):
+    """Training met a NaN or inf (observation, reward or loss) and stopped."""
 
 
 class Interaction(dict):
     """One finished interaction: ``traj`` arrays and its per-interaction metrics."""
 
 
+ActFn = Callable[[np.ndarray, ActingState], tuple[np.ndarray, ActingState]]
+
+
 def rollout(
     env: gym.Env,
     obs: np.ndarray,
     info: dict[str, Any],
-    act: Callable[[np.ndarray, int], np.ndarray],
+    act: ActFn,
+    acting: ActingState,
     to_env: Callable[[np.ndarray], np.ndarray],
     horizon: int,
 ) -> Interaction:
-    """Play one interaction from its first observation; ``act(obs, t)`` returns an action in
-    [-1, 1] and ``to_env`` maps it to the env's bounds.
+    """Play one interaction from its first observation.
+
+    ``act(obs, acting)`` returns an action in [-1, 1] and the next acting state, which is what
+    the next step receives; ``to_env`` maps actions to the env's bounds.
     """
     obs_l, act_l, rew_l, nxt_l = [], [], [], []
     success = None
@@ -50,9 +60,10 @@ def rollout(
 
             raise EnvContractError(
                 f"the interaction did not end within the env's horizon ({horizon} steps): "
-                "a RepeatedInteractionEnv must terminate or truncate by then"
+                "an env must terminate or truncate its episodes by then"
             )
-        a = np.asarray(act(obs, t), np.float32)
+        a, acting = act(obs, acting)
+        a = np.asarray(a, np.float32)
         nxt, r, terminated, truncated, step_info = env.step(to_env(a))
         obs_l.append(obs)
         act_l.append(a)
@@ -85,44 +96,167 @@ def interaction_keys(seed: int, i: int) -> tuple[jax.Array, jax.Array]:
     return tuple(jax.random.split(k))  # type: ignore[return-value]
 
 
+class Stream:
+    """The stream of interactions one training run plays: env, replay buffer, action log,
+    the pending first observation of the next interaction, and the wall time so far.
+
+    ``count`` interactions have been played. A fresh stream starts the env's sequence with
+    ``reset(seed=seed)``; a restored one (:meth:`load_state_dict`) replays its logged actions
+    first (:meth:`replay`) so the env is where it was.
+    """
+
+    def __init__(self, env: gym.Env, buffer: InteractionBuffer, seed: int,
+                 to_env: Callable[[np.ndarray], np.ndarray]) -> None:
+        self.env, self.buffer, self.seed, self.to_env = env, buffer, int(seed), to_env
+        self.action_log: list[np.ndarray] = []
+        self.pending: tuple[np.ndarray, dict[str, Any]] | None = None
+        self.wall_time = 0.0
+
+    @classmethod
+    def for_agent(cls, agent: Agent, env: gym.Env) -> Stream:
+        """A fresh stream sized for ``agent`` on ``env`` (already wrapped as the agent needs)."""
+        buffer = InteractionBuffer(agent.config.buffer_capacity, agent.horizon, agent.obs_dim,
+                                   agent.act_dim)
+        return cls(env, buffer, agent.seed, agent.scale_action)
+
+    @property
+    def count(self) -> int:
+        return self.buffer.count
+
+    def start(self) -> tuple[np.ndarray, dict[str, Any]]:
+        """First observation and info of the next interaction to play."""
+        if self.pending is None:
+            self.pending = self.replay()
+        return self.pending
+
+    def record(self, traj: dict[str, np.ndarray], next_obs: np.ndarray,
+               next_info: dict[str, Any]) -> None:
+        """Store a finished interaction and the start of the next one."""
+        self.buffer.add(traj, next_obs)
+        self.action_log.append(traj["act"])
+        self.pending = (next_obs, next_info)
+
+    def replay(self) -> tuple[np.ndarray, dict[str, Any]]:
+        """Bring the env to the start of interaction ``len(action_log)``.
+
+        Restarts the sequence with ``reset(seed)`` and replays the logged actions. The env
+        contract makes this exact (``reset(seed)`` replays the same sequence for the same
+        actions); the stored transitions are compared on the way, so an env that breaks the
+        contract fails loudly instead of resuming to different numbers.
+        """
+        obs, info = self.env.reset(seed=self.seed)
+        buf = self.buffer
+        for i, acts in enumerate(self.action_log):
+            for t, a in enumerate(acts):
+                obs, _, terminated, truncated, _ = self.env.step(self.to_env(a))
+                if (terminated or truncated) != (t == len(acts) - 1):
+                    raise CheckpointError(
+                        f"replaying interaction {i} to resume: the env ended it after {t + 1} "
+                        f"steps, the log after {len(acts)}; the env is not deterministic under "
+                        "reset(seed)"
+                    )
+            if buf.stored(i) and not np.allclose(buf.last_next_obs(i), obs, atol=1e-5):
+                raise CheckpointError(
+                    f"replaying interaction {i} to resume gave a different final observation "
+                    f"than the checkpoint; the env is not deterministic under reset(seed)"
+                )
+            obs, info = self.env.reset()
+        return obs, info
+
+    def state_dict(self) -> dict[str, np.ndarray]:
+        """The stream's part of a checkpoint: buffer arrays, action log, wall time."""
+        horizon, act_dim = self.buffer.horizon, self.buffer.act_dim
+        lengths = np.array([len(a) for a in self.action_log], np.int32)
+        acts = np.zeros((len(lengths), horizon, act_dim), np.float32)
+        for j, a in enumerate(self.action_log):
+            acts[j, : len(a)] = a
+        d = {f"buffer.{k}": v for k, v in self.buffer.state_dict().items()}
+        d.update(actions=acts, lengths=lengths, wall_time=np.array(self.wall_time))
+        return d
+
+    def load_state_dict(self, d: dict[str, np.ndarray], source: str = "checkpoint") -> None:
+        """Restore :meth:`state_dict`; CheckpointError naming ``source`` when it does not fit."""
+        try:
+            self.buffer.load_state_dict({k[len("buffer."):]: v for k, v in d.items()
+                                         if k.startswith("buffer.")})
+            acts, lengths = d["actions"], d["lengths"]
+            wall = float(d["wall_time"])
+        except (KeyError, ValueError, TypeError) as e:
+            raise CheckpointError(f"{source} has a corrupt stream (buffer or action log): {e}") \
+                from None
+        if len(lengths) != self.buffer.count or acts.shape[1:] != (self.buffer.horizon,
+                                                                   self.buffer.act_dim):
+            raise CheckpointError(f"{source} is inconsistent: its buffer holds "
+                                  f"{self.buffer.count} interactions, its action log "
+                                  f"{len(lengths)}")
+        self.action_log = [acts[j, :n].copy() for j, n in enumerate(lengths)]
+        self.wall_time = wall
+        self.pending = None
+
+
+def _check_finite(i: int, traj: dict[str, np.ndarray], next_obs: np.ndarray,
+                  metrics: dict[str, float]) -> None:
+    for name in ("obs", "rew", "next_obs"):
+        if not np.all(np.isfinite(traj[name])):
+            step = int(np.argwhere(~np.isfinite(traj[name]))[0][0])
+            raise NonFiniteError(f"interaction {i}: the env returned a non-finite {name} at step "
+                                 f"{step}; training stopped (the env must return finite values)")
+    if not np.all(np.isfinite(next_obs)):
+        raise NonFiniteError(f"interaction {i + 1}: the env's reset() returned a non-finite "
+                             "observation; training stopped")
+    bad = sorted(k for k, v in metrics.items() if not np.isfinite(v))
+    if bad:
+        raise NonFiniteError(f"interaction {i}: the update gave non-finite {', '.join(bad)}; "
+                             "training stopped (lower the learning rates, or check the env's "
+                             "reward scale)")
+
+
+def _progress_bar(algo: str, start: int, end: int):
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeRemainingColumn,
+    )
+
+    bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(),
+                   MofNCompleteColumn(), TextColumn("{task.fields[stats]}"),
+                   TimeRemainingColumn(), transient=False)
+    task = bar.add_task(algo, total=end, completed=start, stats="")
+    return bar, task
+
+
 def train(
-    agent: SAC,
+    agent: Any,
+    stream: Stream,
     n_interactions: int,
     progress: bool = False,
     callback: Callable[[dict[str, Any]], None] | None = None,
     logger: Any = None,
 ) -> list[dict[str, Any]]:
-    """Train ``agent`` on ``agent.env`` for ``n_interactions`` more interactions.
+    """Train ``agent`` on ``stream`` for ``n_interactions`` more interactions.
 
     ``callback(row)`` is called after every interaction with its metrics row; ``logger`` (a
     :class:`lili.runs.RunLogger`) writes the run folder and checkpoints. Returns the rows.
+    Stops with :class:`NonFiniteError` at the first NaN or inf in an observation, a reward or a
+    loss, before that interaction is logged or checkpointed (the last checkpoint stays good).
     """
     if isinstance(n_interactions, bool) or not isinstance(n_interactions, (int, np.integer)) \
             or n_interactions < 0:
         raise ValueError(f"n_interactions={n_interactions!r} is invalid; allowed: an integer >= 0")
-    env, cfg = agent.env, agent.config
-    obs, info = agent.pending_start()
-    state = agent.current_latent_state()
-    start = agent.num_interactions
+    env, cfg, buf = stream.env, agent.config, stream.buffer
+    obs, info = stream.start()
+    acting = agent.next_state(buf)
+    start = stream.count
     end = start + int(n_interactions)
     rows: list[dict[str, Any]] = []
     recent: deque[float] = deque(maxlen=20)
-    t0 = time.perf_counter() - agent.wall_time
+    t0 = time.perf_counter() - stream.wall_time
 
-    bar = None
+    bar = task = None
     if progress:
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeRemainingColumn,
-        )
-
-        bar = Progress(TextColumn("[bold]{task.description}"), BarColumn(),
-                       MofNCompleteColumn(), TextColumn("{task.fields[stats]}"),
-                       TimeRemainingColumn(), transient=False)
-        task = bar.add_task(f"{agent.algo}", total=end, completed=start, stats="")
+        bar, task = _progress_bar(agent.algo, start, end)
         bar.start()
     try:
         for i in range(start, end):
@@ -130,23 +264,24 @@ def train(
             if i < cfg.warmup_interactions:
                 rng = np.random.default_rng([agent.seed, i])
 
-                def act(o, t, rng=rng):
-                    return rng.uniform(-1.0, 1.0, agent.act_dim)
+                def act(o, s, rng=rng):
+                    return rng.uniform(-1.0, 1.0, agent.act_dim), s
             else:
-                def act(o, t, key=act_key, z=state.z):
-                    s = LatentState(z, t)
-                    return agent.policy_action(o, s, jax.random.fold_in(key, t), False)
+                def act(o, s, key=act_key):
+                    return agent.act(o, s, jax.random.fold_in(key, int(s.t)), False)
 
-            done = rollout(env, obs, info, act, agent.scale_action, agent.horizon)
+            done = rollout(env, obs, info, act, acting, agent.scale_action, agent.horizon)
             obs, info = env.reset()
-            agent.record(done["traj"], obs, info)
             metrics: dict[str, float] = {}
+            _check_finite(i, done["traj"], obs, metrics)
+            stream.record(done["traj"], obs, info)
             if i + 1 >= cfg.warmup_interactions:
                 if i + 1 == cfg.warmup_interactions:
-                    agent.fit_normaliser()
-                metrics = agent.train_block(upd_key)
-            state = agent.current_latent_state()
-            agent.wall_time = time.perf_counter() - t0
+                    agent.fit_normaliser(buf)
+                metrics = agent.train_block(buf, upd_key)
+                _check_finite(i, done["traj"], obs, metrics)
+            acting = agent.next_state(buf)
+            stream.wall_time = time.perf_counter() - t0
             row = {
                 "interaction": i,
                 "return": done["ret"],
@@ -155,14 +290,14 @@ def train(
                 "strategy": done["strategy"],
                 "strategy_id": done["strategy_id"],
                 **metrics,
-                "wall_time": agent.wall_time,
+                "wall_time": stream.wall_time,
             }
             rows.append(row)
             recent.append(done["ret"])
             if callback is not None:
                 callback(row)
             if logger is not None:
-                logger.log(row, agent)
+                logger.log(row, agent, stream)
             if bar is not None:
                 stats = f"return(20) {np.mean(recent):8.3f}"
                 if done["success"] is not None:
@@ -172,35 +307,3 @@ def train(
         if bar is not None:
             bar.stop()
     return rows
-
-
-def replay(agent: SAC) -> tuple[np.ndarray, dict[str, Any]]:
-    """Bring ``agent.env`` to the start of interaction ``len(agent.action_log)``.
-
-    Restarts the sequence with ``reset(seed=agent.seed)`` and replays the logged actions. The
-    env contract makes this exact (``reset(seed)`` replays the same sequence for the same
-    actions); the stored transitions are compared on the way, so an env that breaks the
-    contract fails loudly instead of resuming to different numbers.
-    """
-    from lili.agents.sac import CheckpointError
-
-    env = agent.env
-    obs, info = env.reset(seed=agent.seed)
-    buf = agent.buffer
-    for i, acts in enumerate(agent.action_log):
-        for t, a in enumerate(acts):
-            obs, _, terminated, truncated, _ = env.step(agent.scale_action(a))
-            if (terminated or truncated) != (t == len(acts) - 1):
-                raise CheckpointError(
-                    f"replaying interaction {i} to resume: the env ended it after {t + 1} steps, "
-                    f"the log after {len(acts)}; the env is not deterministic under reset(seed)"
-                )
-        if i > buf.count - 1 - buf.capacity:
-            stored = buf.arrays["next_obs"][i % buf.capacity, len(acts) - 1]
-            if not np.allclose(stored, obs, atol=1e-5):
-                raise CheckpointError(
-                    f"replaying interaction {i} to resume gave a different final observation "
-                    f"than the checkpoint; the env is not deterministic under reset(seed)"
-                )
-        obs, info = env.reset()
-    return obs, info

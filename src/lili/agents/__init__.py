@@ -1,49 +1,44 @@
-"""Agents. Every agent shares the SAC core of :mod:`lili.agents.sac`."""
+"""Agents. Every agent is the SAC core of :mod:`lili.agents.sac` plus, for some, a latent.
+
+Each name here is a Stable-Baselines3-style facade (``SAC(env).learn(n).save(p)``) over a core
+of pure functions (``agent.core``); see :mod:`lili.agents.base` for the shared types.
+"""
 
 from __future__ import annotations
 
-from pathlib import Path
+import math
 
-import gymnasium as gym
-
+from lili.agents.base import ActingState, AgentState, CheckpointError, check_seed
 from lili.agents.lilac import LILAC
 from lili.agents.lili import LILI
 from lili.agents.random_policy import RandomPolicy
-from lili.agents.sac import SAC, CheckpointError, LatentState, Oracle, read_agent_file
+from lili.agents.sac import AGENTS, SAC, Oracle, load_agent, make_agent
 from lili.agents.slac import SLAC
 from lili.config import AgentConfig
 
 __all__ = ["SAC", "Oracle", "LILI", "LILAC", "ALGOS", "make_agent", "load_agent", "CheckpointError",
-           "LatentState", "SLAC", "RandomPolicy"]
+           "ActingState", "AgentState", "LatentState", "SLAC", "RandomPolicy", "check_seed"]
+
+LatentState = ActingState  # the name of earlier releases
 
 ALGOS = ("sac", "oracle", "lili", "lili-no-influence", "lilac", "slac", "random")
+"""Every algo name (``lili train --algo``), in the order reports list them."""
+assert set(ALGOS) == set(AGENTS), "every agent module registers its algo names"
 
 
-def make_agent(algo: str, env: gym.Env, config: AgentConfig | dict | None = None,
-               seed: int = 0) -> SAC:
-    """Construct the agent named ``algo`` (one of :data:`ALGOS`)."""
-    if algo == "sac":
-        return SAC(env, config, seed)
-    if algo == "oracle":
-        return Oracle(env, config, seed)
-    if algo in ("lili", "lili-no-influence"):
-        return LILI(env, config, seed, influence=algo == "lili")
-    if algo == "lilac":
-        return LILAC(env, config, seed)
-    if algo == "slac":
-        return SLAC(env, config, seed)
-    if algo == "random":
-        return RandomPolicy(env, config, seed)
-    raise ValueError(f"unknown algo {algo!r}; allowed: {', '.join(ALGOS)}")
+def check_extra(config: AgentConfig) -> None:
+    """ValueError unless every entry of ``config.extra`` is an agent with options and its
+    options are valid, whichever algo the config is for: an entry no agent reads (``extra:
+    {slac: {bogus: 1}}`` with ``--algo lili``) would otherwise be ignored silently."""
+    from lili.agents import lilac, slac
 
-
-def load_agent(path: str | Path, env: gym.Env) -> SAC:
-    """Load any saved agent; its class comes from the file."""
-    meta, state = read_agent_file(path)
-    if meta.get("algo") not in ALGOS:
-        raise CheckpointError(f"{path} holds an unknown algo {meta.get('algo')!r}")
-    agent = make_agent(meta["algo"], env, AgentConfig.from_dict(meta["config"]), meta["seed"])
-    agent._check_meta(meta, str(path))
-    agent.load_state_bytes(state, str(path))
-    agent.num_interactions = int(meta["num_interactions"])
-    return agent
+    checks = {"slac": slac._options, "lilac": lilac._options}
+    for key in config.extra:
+        if key not in checks:
+            raise ValueError(f"config extra.{key} is invalid: {key!r} is not an agent with "
+                             f"options; allowed: {', '.join(checks)}")
+        for name, value in config.extra[key].items():
+            if isinstance(value, float) and not math.isfinite(value):
+                raise ValueError(f"config extra.{key}.{name}={value!r} is invalid; allowed: a "
+                                 "finite number")
+        checks[key](config)

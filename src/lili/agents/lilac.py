@@ -68,34 +68,24 @@ from __future__ import annotations
 from typing import Any
 
 import flax.linen as nn
-import gymnasium as gym
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from lili.agents.sac import SAC, LatentState, Params, sg
+from lili.agents.base import ActingState, AgentState, Normaliser, Params
+from lili.agents.lili import decoder_loss
+from lili.agents.sac import SAC, SACCore, register, sg
+from lili.buffer import Batch, InteractionBuffer, Window
 from lili.config import AgentConfig, extra_options
-from lili.nets import LOG_STD_MAX, LOG_STD_MIN, Decoder, Encoder
+from lili.dists import gaussian_kl, soft_clip_log_std
+from lili.nets import Decoder, Encoder
 
-__all__ = ["LILAC", "LatentPrior", "LILAC_OPTIONS", "gaussian_kl"]
+__all__ = ["LILAC", "LILACCore", "LatentPrior", "LILAC_OPTIONS"]
 
 LILAC_OPTIONS: dict[str, Any] = {"prior_window": 2, "kl_weight": 1.0, "critic_latent": "prior"}
 """Defaults of LILAC's options, set as ``AgentConfig(extra={"lilac": {...}})``."""
 
 CRITIC_LATENTS = ("prior", "posterior")
-
-
-def _soft_clip(log_std: jax.Array) -> jax.Array:
-    # Same soft clipping as the actor: the gradient stays alive at the bounds.
-    return LOG_STD_MIN + 0.5 * (LOG_STD_MAX - LOG_STD_MIN) * (jnp.tanh(log_std) + 1)
-
-
-def gaussian_kl(mean_q: jax.Array, log_std_q: jax.Array, mean_p: jax.Array,
-                log_std_p: jax.Array) -> jax.Array:
-    """KL(N(mean_q, std_q) || N(mean_p, std_p)) of diagonal Gaussians, summed over the last axis."""
-    var_q, var_p = jnp.exp(2 * log_std_q), jnp.exp(2 * log_std_p)
-    kl = log_std_p - log_std_q + (var_q + (mean_q - mean_p) ** 2) / (2 * var_p) - 0.5
-    return kl.sum(-1)
 
 
 class LatentPrior(nn.Module):
@@ -122,7 +112,7 @@ class LatentPrior(nn.Module):
             h = jnp.where(present[..., j, None], h_new, h)
             states.append(h)
         mean, log_std = jnp.split(head(jnp.stack(states, -2)), 2, axis=-1)
-        return mean, _soft_clip(log_std)
+        return mean, soft_clip_log_std(log_std)
 
 
 def _options(config: AgentConfig) -> dict[str, Any]:
@@ -151,24 +141,16 @@ def _options(config: AgentConfig) -> dict[str, Any]:
             "critic_latent": opts["critic_latent"]}
 
 
-class LILAC(SAC):
-    """Lifelong Latent Actor-Critic, the LILI paper's baseline (see the module docstring).
+class LILACCore(SACCore):
+    """LILAC's maths (see the module docstring)."""
 
-    ``LILAC(env, AgentConfig(extra={"lilac": {"prior_window": 2, "kl_weight": 1.0,
-    "critic_latent": "prior"}}))`` spells out the defaults.
-    """
-
-    algo = "lilac"
     uses_latent = True
     default_boundary = "influence"
 
-    def __init__(self, env: gym.Env, config: AgentConfig | dict | None = None,
-                 seed: int = 0) -> None:
-        if isinstance(config, dict):
-            config = AgentConfig.from_dict(config)
-        config = config or AgentConfig()
+    def __init__(self, obs_dim: int, act_dim: int, horizon: int, config: AgentConfig,
+                 boundary: str | None = None) -> None:
         self.options = _options(config)
-        super().__init__(env, config, seed)
+        super().__init__(obs_dim, act_dim, horizon, config, boundary)
 
     # -- construction --------------------------------------------------------------------------
     def _latent_param_names(self) -> tuple[str, ...]:
@@ -197,29 +179,28 @@ class LILAC(SAC):
         return {"encoder": {"posterior": post, "prior": prior}, "decoder": dec}
 
     # -- the latent model ------------------------------------------------------------------------
-    def _features(self, norm: dict, win: dict) -> jax.Array:
+    def _features(self, norm: Normaliser, win: Window) -> jax.Array:
         """Per-transition posterior input (s, a, r, s' - s, t/H), normalised."""
         obs = win["obs"]
-        s = (obs - norm["obs_mean"]) / norm["obs_std"]
-        d = (win["next_obs"] - obs - norm["delta_mean"]) / norm["delta_std"]
-        r = (win["rew"] - norm["rew_mean"]) / norm["rew_std"]
         phase = win["t"].astype(jnp.float32) / self.horizon
-        return jnp.concatenate([s, win["act"], r[..., None], d, phase[..., None]], -1)
+        return jnp.concatenate([norm.obs(obs), win["act"], norm.rew(win["rew"])[..., None],
+                                norm.delta(obs, win["next_obs"]), phase[..., None]], -1)
 
-    def posterior_params(self, enc: Params, norm: dict, win: dict) -> tuple[jax.Array, jax.Array]:
+    def posterior_params(self, enc: Params, norm: Normaliser,
+                         win: Window) -> tuple[jax.Array, jax.Array]:
         """q(z^j | tau^j) for each interaction of a window ([..., W, S, ...] fields): (mean,
         log_std), each [..., W, L]."""
         x = self._features(norm, win)[..., None, :, :]
         out = self.posterior.apply(enc["posterior"], x, win["weight"][..., None, :])
         mean, log_std = jnp.split(out, 2, axis=-1)
-        return mean, _soft_clip(log_std)
+        return mean, soft_clip_log_std(log_std)
 
     def prior_params(self, enc: Params, post_mean: jax.Array,
                      present: jax.Array) -> tuple[jax.Array, jax.Array]:
         """p(z^j | z^{<j}) from posterior means [..., W, L] (read detached): [..., W + 1, L]."""
         return self.prior.apply(enc["prior"], sg(post_mean), present)
 
-    def _model(self, enc: Params, norm: dict, win: dict):
+    def _model(self, enc: Params, norm: Normaliser, win: Window):
         """Posteriors and priors over a sampled window k-N..k.
 
         The context k-N..k-1 and interaction k are encoded in separate calls: the context's
@@ -239,7 +220,8 @@ class LILAC(SAC):
         p_mean, p_log_std = self.prior_params(enc, q_mean, present)
         return q_mean, q_log_std, p_mean, p_log_std, present
 
-    def elbo_terms(self, model: Params, norm: dict, batch: dict, key: jax.Array) -> dict:
+    def elbo_terms(self, model: Params, norm: Normaliser, batch: Batch,
+                   key: jax.Array) -> dict[str, jax.Array]:
         """The representation loss on a sampled batch (window k-N..k) and its parts.
 
         ``loss`` = the negative ELBO per step of interaction k: reconstruction NLL of its batch
@@ -257,12 +239,7 @@ class LILAC(SAC):
         win, n = batch["window"], self.history
         q_mean, q_log_std, p_mean, p_log_std, _ = self._model(model["encoder"], norm, win)
         z = q_mean[:, n] + jnp.exp(q_log_std[:, n]) * jax.random.normal(key, q_mean[:, n].shape)
-        s = (batch["obs"] - norm["obs_mean"]) / norm["obs_std"]
-        d = (batch["next_obs"] - batch["obs"] - norm["delta_mean"]) / norm["delta_std"]
-        r = (batch["rew"] - norm["rew_mean"]) / norm["rew_std"]
-        zb = jnp.broadcast_to(z[:, None, :], (*s.shape[:-1], z.shape[-1]))
-        pred = self.decoder.apply(model["decoder"], s, batch["act"], zb)
-        recon = 0.5 * ((pred - jnp.concatenate([d, r[..., None]], -1)) ** 2).sum(-1).mean()
+        recon = decoder_loss(self.decoder, model["decoder"], norm, batch, z)
         # The prior's last entry predicts k+1, which has no posterior in this window.
         kl = gaussian_kl(q_mean, q_log_std, p_mean[:, :-1], p_log_std[:, :-1])
         # The last sampled step is the interaction's last, so max t + 1 is its length.
@@ -274,12 +251,13 @@ class LILAC(SAC):
                 "kl_context": kl[:, :n].mean()}
 
     # -- SAC hooks --------------------------------------------------------------------------------
-    def _update(self, state: dict, batch: dict, key: jax.Array) -> tuple[dict, dict]:
+    def update(self, state: AgentState, batch: Batch,
+               key: jax.Array) -> tuple[AgentState, dict[str, jax.Array]]:
         # The ELBO needs noise for z ~ q; the hooks get none, so it travels in the batch.
         k_rep, k_sac = jax.random.split(key)
-        return super()._update(state, dict(batch, rep_key=k_rep), k_sac)
+        return super().update(state, dict(batch, rep_key=k_rep), k_sac)
 
-    def _latents(self, model: Params, target: Params, norm: dict, batch: dict):
+    def _latents(self, model: Params, target: Params, norm: Normaliser, batch: Batch):
         n = self.history
         enc_t = target["encoder"] if self.config.target_encoder else sg(model["encoder"])
         q_mean, _, p_mean, _, present = self._model(model["encoder"], norm, batch["window"])
@@ -290,18 +268,38 @@ class LILAC(SAC):
             return q_mean[:, n], tq_mean[:, n], tp_next[:, n + 1]
         return sg(p_mean[:, n]), tp_mean[:, n], tp_next[:, n + 1]
 
-    def _rep_loss(self, model: Params, norm: dict, batch: dict, z: jax.Array) -> jax.Array:
+    def _rep_loss(self, model: Params, norm: Normaliser, batch: Batch, z: jax.Array) -> jax.Array:
         return self.elbo_terms(model, norm, batch, batch["rep_key"])["loss"]
 
-    def _act_latent(self, model: Params, norm: dict, window: dict) -> jax.Array:
+    def _act_latent(self, model: Params, norm: Normaliser, window: Window) -> jax.Array:
         enc = model["encoder"]
         batched = {k: v[None] for k, v in window.items()}
         q_mean, _ = self.posterior_params(enc, norm, batched)
         p_mean, _ = self.prior_params(enc, q_mean, batched["weight"].sum(-1) > 0)
         return p_mean[0, -1]
 
-    def initial_state(self) -> LatentState:
+    def initial_acting(self, state: AgentState) -> ActingState:
         """The acting state at the first interaction: the unconditional prior's mean."""
-        empty = self.buffer.window(-1, self.history, self.config.encoder_transitions)
-        z = self._jit_latent(self.state["model"], self.state["norm"], empty)
-        return LatentState(np.asarray(z, np.float32), 0)
+        empty = InteractionBuffer(max(2, self.history), self.horizon, self.obs_dim,
+                                  self.act_dim).window(-1, self.history,
+                                                       self.config.encoder_transitions)
+        return ActingState(self.jit_latent(state.model, state.norm, empty),
+                           jnp.zeros((), jnp.int32))
+
+
+class LILAC(SAC):
+    """Lifelong Latent Actor-Critic, the LILI paper's baseline (see the module docstring).
+
+    ``LILAC(env, AgentConfig(extra={"lilac": {"prior_window": 2, "kl_weight": 1.0,
+    "critic_latent": "prior"}}))`` spells out the defaults.
+    """
+
+    algo = "lilac"
+    core_cls = LILACCore
+
+    @property
+    def options(self) -> dict[str, Any]:
+        return self.core.options
+
+
+register("lilac", LILAC)

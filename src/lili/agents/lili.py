@@ -26,32 +26,33 @@ import gymnasium as gym
 import jax
 import jax.numpy as jnp
 
-from lili.agents.sac import SAC, Params, sg
+from lili.agents.base import Normaliser, Params
+from lili.agents.sac import SAC, SACCore, register, sg
+from lili.buffer import Batch, Window
 from lili.config import AgentConfig
+from lili.dists import unit_gaussian_nll
 from lili.nets import Decoder, Encoder
 
-__all__ = ["LILI"]
+__all__ = ["LILI", "LILICore", "decoder_loss"]
 
 
-class LILI(SAC):
-    """Learning and Influencing Latent Intent (Xie et al., CoRL 2020).
+def decoder_loss(decoder: Decoder, params: Params, norm: Normaliser, batch: Batch,
+                 z: jax.Array) -> jax.Array:
+    """J_rep's reconstruction term: the unit-variance Gaussian NLL of tau^k's normalised
+    (s' - s, r) under D(s, a, z^k), with ``z`` [B, L] held for each interaction's transitions.
+    Shared by LILI and LILAC."""
+    s = norm.obs(batch["obs"])
+    target = jnp.concatenate([norm.delta(batch["obs"], batch["next_obs"]),
+                              norm.rew(batch["rew"])[..., None]], -1)
+    zb = jnp.broadcast_to(z[:, None, :], (*s.shape[:-1], z.shape[-1]))
+    return unit_gaussian_nll(decoder.apply(params, s, batch["act"], zb), target)
 
-    ``LILI(env)`` optimises reward across interactions (it learns to influence the partner);
-    ``LILI(env, influence=False)`` is the paper's greedy "LILI (no influence)".
-    """
+
+class LILICore(SACCore):
+    """LILI's maths (module docstring); ``boundary`` "influence" (LILI) or "cut" (no influence)."""
 
     uses_latent = True
     default_boundary = "influence"
-
-    def __init__(self, env: gym.Env, config: AgentConfig | dict | None = None, seed: int = 0,
-                 influence: bool = True) -> None:
-        if not isinstance(influence, bool):
-            raise ValueError(f"influence={influence!r} is invalid; allowed: True or False")
-        self.influence = influence
-        self.algo = "lili" if influence else "lili-no-influence"
-        if not influence:
-            self.default_boundary = "cut"
-        super().__init__(env, config, seed)
 
     def _latent_param_names(self) -> tuple[str, ...]:
         return ("encoder", "decoder")
@@ -71,22 +72,19 @@ class LILI(SAC):
                                 jnp.zeros((1, self.latent_dim)))
         return {"encoder": enc, "decoder": dec}
 
-    def _features(self, norm: dict, win: dict) -> jax.Array:
+    def _features(self, norm: Normaliser, win: Window) -> jax.Array:
         """Per-transition encoder input from window fields shaped [..., steps, ...]."""
         obs, nxt = win["obs"], win["next_obs"]
-        s = (obs - norm["obs_mean"]) / norm["obs_std"]
-        s2 = (nxt - norm["obs_mean"]) / norm["obs_std"]
-        d = (nxt - obs - norm["delta_mean"]) / norm["delta_std"]
-        r = (win["rew"] - norm["rew_mean"]) / norm["rew_std"]
         phase = win["t"].astype(jnp.float32) / self.horizon
         last = win["last"].astype(jnp.float32)
         return jnp.concatenate(
-            [s, win["act"], r[..., None], d, s2, phase[..., None], last[..., None]], -1)
+            [norm.obs(obs), win["act"], norm.rew(win["rew"])[..., None], norm.delta(obs, nxt),
+             norm.obs(nxt), phase[..., None], last[..., None]], -1)
 
-    def _encode(self, enc: Params, norm: dict, win: dict) -> jax.Array:
+    def _encode(self, enc: Params, norm: Normaliser, win: Window) -> jax.Array:
         return self.encoder.apply(enc, self._features(norm, win), win["weight"])
 
-    def _latents(self, model: Params, target: Params, norm: dict, batch: dict):
+    def _latents(self, model: Params, target: Params, norm: Normaliser, batch: Batch):
         win = batch["window"]
         prev = {k: v[:, :-1] for k, v in win.items()}
         nxt = {k: v[:, 1:] for k, v in win.items()}
@@ -94,15 +92,36 @@ class LILI(SAC):
         enc_t = target["encoder"] if self.config.target_encoder else sg(model["encoder"])
         return z, self._encode(enc_t, norm, prev), self._encode(enc_t, norm, nxt)
 
-    def _rep_loss(self, model: Params, norm: dict, batch: dict, z: jax.Array) -> jax.Array:
-        s = (batch["obs"] - norm["obs_mean"]) / norm["obs_std"]
-        d = (batch["next_obs"] - batch["obs"] - norm["delta_mean"]) / norm["delta_std"]
-        r = (batch["rew"] - norm["rew_mean"]) / norm["rew_std"]
-        zb = jnp.broadcast_to(z[:, None, :], (*s.shape[:-1], z.shape[-1]))
-        pred = self.decoder.apply(model["decoder"], s, batch["act"], zb)
-        err = pred - jnp.concatenate([d, r[..., None]], -1)
-        return 0.5 * (err ** 2).sum(-1).mean()
+    def _rep_loss(self, model: Params, norm: Normaliser, batch: Batch, z: jax.Array) -> jax.Array:
+        return decoder_loss(self.decoder, model["decoder"], norm, batch, z)
 
-    def _act_latent(self, model: Params, norm: dict, window: dict) -> jax.Array:
+    def _act_latent(self, model: Params, norm: Normaliser, window: Window) -> jax.Array:
         batched = {k: v[None] for k, v in window.items()}
         return self._encode(model["encoder"], norm, batched)[0]
+
+
+class LILI(SAC):
+    """Learning and Influencing Latent Intent (Xie et al., CoRL 2020).
+
+    ``LILI(env)`` optimises reward across interactions (it learns to influence the partner);
+    ``LILI(env, influence=False)`` is the paper's greedy "LILI (no influence)".
+    """
+
+    algo = "lili"
+    core_cls = LILICore
+
+    def __init__(self, env: gym.Env | str, config: AgentConfig | dict | None = None,
+                 seed: int = 0, influence: bool = True) -> None:
+        if not isinstance(influence, bool):
+            raise ValueError(f"influence={influence!r} is invalid; allowed: True or False")
+        self.influence = influence
+        self.algo = "lili" if influence else "lili-no-influence"
+        super().__init__(env, config, seed)
+
+    def _make_core(self) -> SACCore:
+        return LILICore(self.obs_dim, self.act_dim, self.horizon, self.config,
+                        boundary="influence" if self.influence else "cut")
+
+
+register("lili", LILI)
+register("lili-no-influence", LILI, influence=False)

@@ -12,13 +12,28 @@ from typing import ClassVar
 import jax
 import jax.numpy as jnp
 
-from lili.agents.sac import SAC, Params
+from lili.agents.base import ActingState, AgentState, Normaliser, Params
+from lili.agents.sac import SAC, SACCore, register
+from lili.buffer import InteractionBuffer
 
-__all__ = ["RandomPolicy"]
+__all__ = ["RandomPolicy", "RandomCore"]
+
+
+class RandomCore(SACCore):
+    """Uniform actions from the caller's key; the learning block is a no-op."""
+
+    def _act(self, actor: Params, norm: Normaliser, obs: jax.Array, acting: ActingState,
+             key: jax.Array, deterministic: bool) -> tuple[jax.Array, ActingState]:
+        a = jax.random.uniform(key, (self.act_dim,), jnp.float32, -1.0, 1.0)
+        return a, acting.replace(t=acting.t + 1)
+
+    def learn_block(self, state: AgentState, buffer: InteractionBuffer,
+                    key: jax.Array) -> tuple[AgentState, dict[str, float]]:
+        return state, {}
 
 
 class RandomPolicy(SAC):
-    """Uniform random actions in the action space; no updates (``train_block`` is a no-op).
+    """Uniform random actions in the action space; no updates.
 
     ``deterministic`` is ignored: a random policy has no mode. The action comes from the key the
     caller passes (the training loop derives it from ``(seed, interaction, step)``), so runs are
@@ -26,10 +41,7 @@ class RandomPolicy(SAC):
     """
 
     algo: ClassVar[str] = "random"
+    core_cls = RandomCore
 
-    def _act(self, actor: Params, norm: dict, obs: jax.Array, t: jax.Array, z: jax.Array,
-             key: jax.Array, deterministic: bool) -> jax.Array:
-        return jax.random.uniform(key, (self.act_dim,), jnp.float32, -1.0, 1.0)
 
-    def train_block(self, key: jax.Array) -> dict[str, float]:
-        return {}
+register("random", RandomPolicy)

@@ -73,18 +73,18 @@ from collections.abc import Sequence
 from typing import Any
 
 import flax.linen as nn
-import gymnasium as gym
 import jax
 import jax.numpy as jnp
 import numpy as np
 import optax
 
-from lili.agents.sac import SAC, LatentState, Params, sg
-from lili.buffer import sample
+from lili.agents.base import ActingState, AgentState, Normaliser, Params
+from lili.agents.sac import SAC, SACCore, register, sg
+from lili.buffer import InteractionBuffer, sample
 from lili.config import AgentConfig, extra_options
-from lili.nets import tanh_gaussian
+from lili.dists import gaussian_kl, gaussian_logp, tanh_gaussian
 
-__all__ = ["SLAC", "SLACState", "LatentModel", "SLAC_OPTIONS", "sample_sequences",
+__all__ = ["SLAC", "SLACCore", "LatentModel", "SLAC_OPTIONS", "sample_sequences",
            "gather_sequences", "actor_input"]
 
 SLAC_OPTIONS: dict[str, Any] = {
@@ -307,56 +307,23 @@ class LatentModel(nn.Module):
         return self.decode(z1, z2), self.reward_dist(z1, z2, a, z1n, z2n)
 
 
-def _gauss_logp(x: jax.Array, mean: jax.Array, std: jax.Array) -> jax.Array:
-    return -0.5 * (((x - mean) / std) ** 2 + 2 * jnp.log(std) + jnp.log(2 * jnp.pi))
+class SLACCore(SACCore):
+    """SLAC's maths on the SAC core (module docstring). Its latent model and the model's
+    optimiser live in ``AgentState.aux`` (``slac``, ``opt_slac``); its acting state's memory
+    holds the interaction's last K-1 observations (raw) and actions (in [-1, 1]), oldest
+    first, zero before the interaction's start."""
 
-
-def _kl(mq: jax.Array, sq: jax.Array, mp: jax.Array, sp: jax.Array) -> jax.Array:
-    """KL(N(mq, sq) || N(mp, sp)) summed over the last axis."""
-    return (jnp.log(sp / sq) + (sq ** 2 + (mq - mp) ** 2) / (2 * sp ** 2) - 0.5).sum(-1)
-
-
-class SLACState(LatentState):
-    """SLAC's acting state: the step index and the current interaction's last K-1 observations
-    (raw) and actions (in [-1, 1]), oldest first, zero before the interaction's start.
-
-    Returned and accepted by :meth:`SLAC.predict`; ``z`` is empty (SLAC has no per-interaction
-    latent: its belief is recomputed from the history).
-    """
-
-    def __init__(self, z: np.ndarray, t: int, obs: np.ndarray, act: np.ndarray) -> None:
-        super().__init__(z, t)
-        self.obs, self.act = obs, act
-
-    def __repr__(self) -> str:
-        return f"SLACState(t={self.t}, history={min(self.t, len(self.obs))} steps)"
-
-
-class SLAC(SAC):
-    """Stochastic Latent Actor-Critic, the LILI paper's POMDP baseline (module docstring).
-
-    ``SLAC(env, AgentConfig(extra={"slac": {"model_every": 2}}))`` changes one option of
-    :data:`SLAC_OPTIONS`.
-    """
-
-    algo = "slac"
     default_boundary = "bootstrap"
 
-    def __init__(self, env: gym.Env, config: AgentConfig | dict | None = None,
-                 seed: int = 0) -> None:
-        if isinstance(config, dict):
-            config = AgentConfig.from_dict(config)
-        config = config or AgentConfig()
+    def __init__(self, obs_dim: int, act_dim: int, horizon: int, config: AgentConfig,
+                 boundary: str | None = None) -> None:
         if config.boundary not in (None, "bootstrap", "cut"):
             raise ValueError(f"config boundary={config.boundary!r} is invalid for SLAC; allowed: "
                              "bootstrap, cut or null (= bootstrap)")
         self.options = _options(config)
-        self.pretrain_losses: np.ndarray | None = None
-        self._rollout_state: SLACState | None = None
-        super().__init__(env, config, seed)
-        self._jit_act_seq = jax.jit(self._act_seq, static_argnames="deterministic")
-        self._jit_model_step = jax.jit(self._model_step)
-        self._jit_model_batch = jax.jit(self._model_batch)
+        super().__init__(obs_dim, act_dim, horizon, config, boundary)
+        self.jit_model_step = jax.jit(self._model_step)
+        self.jit_model_batch = jax.jit(self._model_batch)
 
     # -- construction --------------------------------------------------------------------------
     def _build(self) -> None:
@@ -371,17 +338,15 @@ class SLAC(SAC):
         o, k, phase = self.options, self.seq_len, int(self.config.phase_feature)
         return o["z1_dim"] + o["z2_dim"] + phase, k * self.x_dim + (k - 1) * self.act_dim
 
-    def _init_state(self, key: jax.Array) -> dict[str, Any]:
-        state = super()._init_state(key)
+    def _init_aux(self, key: jax.Array) -> dict[str, Any]:
         # One compiled call: run eagerly, every initialiser compiles on its own (~15 s here).
         params = jax.jit(self.lvm.init)(jax.random.fold_in(key, 1), jnp.zeros((1, self.x_dim)),
                                         jnp.zeros((1, self.act_dim)))
-        state["slac"] = params
-        state["opt_slac"] = self.opt_slac.init(params)
-        return state
+        return {"slac": params, "opt_slac": self.opt_slac.init(params)}
 
     # -- the model ------------------------------------------------------------------------------
-    def _frames_x(self, norm: dict, obs: jax.Array, t: jax.Array, valid: jax.Array) -> jax.Array:
+    def _frames_x(self, norm: Normaliser, obs: jax.Array, t: jax.Array,
+                  valid: jax.Array) -> jax.Array:
         """Network frames: normalised observation (+ phase), zero where ``valid`` is False."""
         return self._x(norm, obs, t) * valid[..., None]
 
@@ -423,48 +388,53 @@ class SLAC(SAC):
 
         return cat(z1, z1s), cat(z2, z2s), cat(m1, ms), cat(s1, ss)
 
-    def elbo_terms(self, params: Params, norm: dict, seq: dict, key: jax.Array) -> dict:
+    def elbo_terms(self, params: Params, norm: Normaliser, seq: dict[str, jax.Array],
+                   key: jax.Array) -> dict[str, jax.Array]:
         """The negative ELBO of sequences (fields ``win_*`` of :func:`gather_sequences`, [N, ...])
         and its parts, each a sum over time and dims, mean over sequences."""
-        lvm, std_x = self.lvm, self.options["decoder_std"]
+        lvm = self.lvm
+        log_std_x = jnp.log(self.options["decoder_std"])
         x = self._frames_x(norm, seq["win_obs"], seq["win_t"], seq["win_valid"])
         a = seq["win_act"]
-        r = (seq["win_rew"] - norm["rew_mean"]) / norm["rew_std"]
+        r = norm.rew(seq["win_rew"])
         fmask = seq["win_valid"].astype(jnp.float32)
         smask = seq["win_step_valid"].astype(jnp.float32)
         z1, z2, mq, sq = self.posterior(params, x, a, key)
         mp, sp = lvm.apply(params, z2[:, :-1], a, method=LatentModel.z1_prior)
         mp = jnp.concatenate([jnp.zeros_like(mq[:, :1]), mp], 1)
         sp = jnp.concatenate([jnp.ones_like(sq[:, :1]), sp], 1)
-        kl = (_kl(mq, sq, mp, sp) * fmask).sum(-1)
+        kl = (gaussian_kl(mq, jnp.log(sq), mp, jnp.log(sp)) * fmask).sum(-1)
         x_hat = lvm.apply(params, z1, z2, method=LatentModel.decode)
-        obs_nll = -(_gauss_logp(x, x_hat, std_x).sum(-1) * fmask).sum(-1)
+        obs_nll = -(gaussian_logp(x, x_hat, log_std_x).sum(-1) * fmask).sum(-1)
         rm, rs = lvm.apply(params, z1[:, :-1], z2[:, :-1], a, z1[:, 1:], z2[:, 1:],
                            method=LatentModel.reward_dist)
-        rew_nll = -(_gauss_logp(r, rm, rs) * smask).sum(-1)
+        rew_nll = -(gaussian_logp(r, rm, jnp.log(rs)) * smask).sum(-1)
         loss = (obs_nll + rew_nll + kl).mean()
         return {"loss": loss, "kl": kl.mean(), "obs_nll": obs_nll.mean(),
                 "rew_nll": rew_nll.mean()}
 
-    def _model_step(self, params: Params, opt: Any, norm: dict, seq: dict, key: jax.Array):
+    def _model_step(self, params: Params, opt: Any, norm: Normaliser, seq: dict[str, jax.Array],
+                    key: jax.Array):
         (_, terms), grads = jax.value_and_grad(
             lambda p: (lambda d: (d["loss"], d))(self.elbo_terms(p, norm, seq, key)),
             has_aux=True)(params)
         upd, opt = self.opt_slac.update(grads, opt, params)
         return optax.apply_updates(params, upd), opt, terms
 
-    def _model_batch(self, arrays: dict, count: jax.Array, key: jax.Array) -> dict:
+    def _model_batch(self, arrays: dict[str, jax.Array], count: jax.Array,
+                     key: jax.Array) -> dict[str, jax.Array]:
         seq = sample_sequences(arrays, count, key, self.options["model_batch"], 1, self.seq_len)
         return {k: v[:, 0] for k, v in seq.items() if k.startswith("win_")}
 
     # -- SAC hooks -------------------------------------------------------------------------------
-    def _batch(self, state: dict, arrays: dict, count: jax.Array, key: jax.Array) -> dict:
+    def _batch(self, state: AgentState, arrays: dict[str, jax.Array], count: jax.Array,
+               key: jax.Array) -> dict[str, Any]:
         """RL sequences with the critic's and actor's inputs (detached), plus a model batch."""
         cfg, k = self.config, self.seq_len
         k_rl, k_model, k_z, k_first = jax.random.split(key, 4)
         batch = sample_sequences(arrays, count, k_rl, cfg.batch_interactions,
                                  cfg.per_interaction, k)
-        norm, params = state["norm"], sg(state["slac"])
+        norm, params = state.norm, sg(state.aux["slac"])
         b, m = batch["t"].shape
         flat = lambda v: v.reshape(b * m, *v.shape[2:])  # noqa: E731
         x_win = self._frames_x(norm, batch["win_obs"], batch["win_t"], batch["win_valid"])
@@ -501,158 +471,126 @@ class SLAC(SAC):
         )
         return out
 
-    def _inputs(self, model: Params, state: dict, batch: dict):
+    def _inputs(self, model: Params, state: AgentState, batch: dict[str, Any]):
         return batch["x_critic"], batch["x_actor"], jnp.zeros((batch["rew"].shape[0], 0))
 
-    def _target_inputs(self, state: dict, batch: dict) -> tuple[jax.Array, jax.Array]:
+    def _target_inputs(self, state: AgentState, batch: dict[str, Any]
+                       ) -> tuple[jax.Array, jax.Array]:
         return batch["x_critic_next"], batch["x_actor_next"]
 
-    def _update(self, state: dict, batch: dict, key: jax.Array) -> tuple[dict, dict]:
+    def update(self, state: AgentState, batch: dict[str, Any],
+               key: jax.Array) -> tuple[AgentState, dict[str, jax.Array]]:
         # One model step on its own batch and optimiser, then the SAC step; the critic's latents
         # were sampled in _batch from the model before this step (as in the official train step).
         k_model = jax.random.fold_in(key, 1)
         every = self.options["model_every"]
 
         def model_step(s):
-            return self._model_step(s["slac"], s["opt_slac"], s["norm"], batch["model"], k_model)
+            return self._model_step(s.aux["slac"], s.aux["opt_slac"], s.norm, batch["model"],
+                                    k_model)
 
         if every == 1:
             params, opt, terms = model_step(state)
         else:
             def skip(s):
                 zero = jnp.zeros(())
-                return s["slac"], s["opt_slac"], {"loss": zero, "kl": zero, "obs_nll": zero,
-                                                  "rew_nll": zero}
+                return s.aux["slac"], s.aux["opt_slac"], {"loss": zero, "kl": zero,
+                                                          "obs_nll": zero, "rew_nll": zero}
 
-            taken = state["updates"] % every == 0
+            taken = state.updates % every == 0
             params, opt, terms = jax.lax.cond(taken, model_step, skip, state)
             terms = dict(terms, model_steps=taken.astype(jnp.float32))
-        state = dict(state, slac=params, opt_slac=opt)
-        state, metrics = super()._update(state, batch, key)
+        state = state.replace(aux=dict(state.aux, slac=params, opt_slac=opt))
+        state, metrics = super().update(state, batch, key)
         metrics = dict(metrics, rep_loss=terms.pop("loss"), **terms)
         return state, metrics
 
-    def _block(self, state: dict, arrays: dict, count: jax.Array, key: jax.Array):
-        state, metrics = super()._block(state, arrays, count, key)
+    def block(self, state: AgentState, arrays: dict[str, jax.Array], count: jax.Array,
+              key: jax.Array) -> tuple[AgentState, dict[str, jax.Array]]:
+        state, metrics = super().block(state, arrays, count, key)
         if "model_steps" in metrics:
             # Skipped model steps report zeros: average the model's terms over the steps taken.
             frac = jnp.maximum(metrics.pop("model_steps"), 1e-9)
             metrics = {k: v / frac if k in MODEL_METRICS else v for k, v in metrics.items()}
         return state, metrics
 
-    def pretrain(self, steps: int, key: jax.Array) -> np.ndarray:
-        """Run ``steps`` model-only steps on the buffer (fresh batches); return their losses.
+    def pretrain(self, state: AgentState, buffer: InteractionBuffer, steps: int,
+                 key: jax.Array) -> tuple[AgentState, np.ndarray]:
+        """Run ``steps`` model-only steps on the buffer (fresh batches); return the new state
+        and the steps' losses.
 
         One compiled step called in a loop rather than a scan: the same compiled step serves
         any number of steps, and XLA compiles a scan of it as a separate ~10 s program.
         """
-        arrays = jax.device_put(self.buffer.arrays)
-        count = jnp.asarray(self.buffer.count, jnp.int32)
-        params, opt, norm = self.state["slac"], self.state["opt_slac"], self.state["norm"]
+        arrays, count = buffer.arrays, jnp.asarray(buffer.count, jnp.int32)
+        params, opt = state.aux["slac"], state.aux["opt_slac"]
         losses = []
         for i in range(steps):
             kb, ke = jax.random.split(jax.random.fold_in(key, i))
-            seq = self._jit_model_batch(arrays, count, kb)
-            params, opt, terms = self._jit_model_step(params, opt, norm, seq, ke)
+            seq = self.jit_model_batch(arrays, count, kb)
+            params, opt, terms = self.jit_model_step(params, opt, state.norm, seq, ke)
             losses.append(terms["loss"])
-        self.state = dict(self.state, slac=params, opt_slac=opt)
-        return np.asarray(losses)
+        return state.replace(aux=dict(state.aux, slac=params, opt_slac=opt)), np.asarray(losses)
 
-    def train_block(self, key: jax.Array) -> dict[str, float]:
+    def learn_block(self, state: AgentState, buffer: InteractionBuffer,
+                    key: jax.Array) -> tuple[AgentState, dict[str, float]]:
         """One fused block of updates; before the very first one, ``pretrain_steps`` model-only
-        steps (a function of the state, so a resumed run repeats exactly what it would have)."""
+        steps (a function of the state, so a resumed run repeats exactly what it would have).
+        The first block's metrics then carry ``pretrain_first`` and ``pretrain_last``, the
+        pretraining's first and last loss."""
         steps = self.options["pretrain_steps"]
-        if steps > 0 and int(self.state["updates"]) == 0:
-            self.pretrain_losses = self.pretrain(steps, jax.random.fold_in(key, 1))
-        return super().train_block(key)
+        extra: dict[str, float] = {}
+        if steps > 0 and int(state.updates) == 0:
+            state, losses = self.pretrain(state, buffer, steps, jax.random.fold_in(key, 1))
+            extra = {"pretrain_first": float(losses[0]), "pretrain_last": float(losses[-1])}
+        state, metrics = super().learn_block(state, buffer, key)
+        return state, {**metrics, **extra}
 
     # -- acting --------------------------------------------------------------------------------
-    def _act_seq(self, actor: Params, norm: dict, obs: jax.Array, t: jax.Array,
-                 valid: jax.Array, act: jax.Array, key: jax.Array,
-                 deterministic: bool) -> jax.Array:
-        """Action from K frames (raw obs [K, od], steps [K], valid [K]) and K-1 actions."""
-        mean, log_std = self.actor.apply(actor, self.history_x(norm, obs, t, valid, act))
-        if deterministic:
-            return jnp.tanh(mean)
-        return tanh_gaussian(mean, log_std, key)[0]
-
-    def history_x(self, norm: dict, obs: jax.Array, t: jax.Array, valid: jax.Array,
-                  act: jax.Array) -> jax.Array:
-        """The actor's input from :meth:`acting_input`'s arrays (what ``_batch`` builds from
-        the buffer for the same step)."""
-        return actor_input(self._frames_x(norm, obs, t, valid), act * valid[:-1, None])
-
-    def acting_input(self, observation: np.ndarray, state: SLACState
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(frames [K, od], steps [K], valid [K], actions [K-1, ad]) the actor reads at
-        ``state.t`` given the current ``observation`` (the same layout training gathers)."""
-        k = self.seq_len
-        obs = np.concatenate([state.obs, np.asarray(observation, np.float32)[None]], 0)
-        steps = np.arange(state.t - k + 1, state.t + 1)
-        return obs, steps, steps >= 0, state.act
-
-    def _action(self, observation: np.ndarray, state: SLACState, key: jax.Array,
-                deterministic: bool) -> np.ndarray:
-        obs, steps, valid, act = self.acting_input(observation, state)
-        return np.asarray(self._jit_act_seq(self.state["actor"], self.state["norm"], obs, steps,
-                                            valid, act, key, deterministic=deterministic))
-
-    def _advance(self, state: SLACState, observation: np.ndarray, a: np.ndarray) -> SLACState:
-        obs = np.concatenate([state.obs[1:], np.asarray(observation, np.float32)[None]], 0)
-        act = np.concatenate([state.act[1:], np.asarray(a, np.float32)[None]], 0)
-        return SLACState(state.z, state.t + 1, obs, act)
-
-    def initial_state(self) -> SLACState:
+    def initial_acting(self, state: AgentState) -> ActingState:
         """The acting state at the start of an interaction (empty history)."""
         k = self.seq_len
-        return SLACState(np.zeros(0, np.float32), 0, np.zeros((k - 1, self.obs_dim), np.float32),
-                         np.zeros((k - 1, self.act_dim), np.float32))
+        return ActingState(jnp.zeros(0, jnp.float32), jnp.zeros((), jnp.int32),
+                           {"obs": jnp.zeros((k - 1, self.obs_dim), jnp.float32),
+                            "act": jnp.zeros((k - 1, self.act_dim), jnp.float32)})
 
-    def _history(self, state: LatentState | None) -> SLACState:
-        if state is None:
-            return self.initial_state()
-        if isinstance(state, SLACState):
-            return state
-        if state.t == 0:
-            return self.initial_state()
-        raise ValueError(f"SLAC acts on the interaction's history: state={state!r} has none; "
-                         "allowed: None or initial_state() at t=0, then the state predict returned")
+    def history_x(self, norm: Normaliser, obs: jax.Array, t: jax.Array, valid: jax.Array,
+                  act: jax.Array) -> jax.Array:
+        """The actor's input from K frames (raw obs [K, od], steps [K], valid [K]) and K-1
+        actions (what ``_batch`` builds from the buffer for the same step)."""
+        return actor_input(self._frames_x(norm, obs, t, valid), act * valid[:-1, None])
 
-    def predict(self, observation: np.ndarray, state: LatentState | None = None,
-                deterministic: bool = True, key: jax.Array | None = None
-                ) -> tuple[np.ndarray, SLACState]:
-        """Action for ``observation`` in env units, and the state for the next step.
+    def acting_input(self, obs: jax.Array, acting: ActingState):
+        """(frames [K, od], steps [K], valid [K], actions [K-1, ad]) the actor reads at
+        ``acting.t`` given the current ``obs`` (the same layout training gathers)."""
+        k = self.seq_len
+        frames = jnp.concatenate([acting.memory["obs"], obs[None]], 0)
+        steps = acting.t - k + 1 + jnp.arange(k)
+        return frames, steps, steps >= 0, acting.memory["act"]
 
-        Start each interaction with ``None`` or :meth:`initial_state`; pass the returned state
-        back on the next step (it carries the last K-1 observations and actions).
-        """
-        hist = self._history(state)
-        obs = np.asarray(observation, np.float32)
-        if obs.shape != (self.obs_dim,):
-            raise ValueError(f"observation has shape {obs.shape}; expected ({self.obs_dim},)")
-        key = jax.random.PRNGKey(0) if key is None else key
-        a = self._action(obs, hist, key, deterministic)
-        return self.scale_action(a), self._advance(hist, obs, a)
+    def _act(self, actor: Params, norm: Normaliser, obs: jax.Array, acting: ActingState,
+             key: jax.Array, deterministic: bool) -> tuple[jax.Array, ActingState]:
+        frames, steps, valid, act = self.acting_input(obs, acting)
+        mean, log_std = self.actor.apply(actor, self.history_x(norm, frames, steps, valid, act))
+        a = jnp.tanh(mean) if deterministic else tanh_gaussian(mean, log_std, key)[0]
+        memory = {"obs": frames[1:], "act": jnp.concatenate([act[1:], a[None]], 0)}
+        return a, ActingState(acting.z, acting.t + 1, memory)
 
-    def policy_action(self, obs: np.ndarray, state: LatentState, key: jax.Array,
-                      deterministic: bool) -> np.ndarray:
-        """The network's action in [-1, 1] at step ``state.t`` of the current interaction.
 
-        The training loop and :func:`lili.evaluate.evaluate` pass a fresh ``LatentState(z, t)``
-        each step, so the agent keeps the interaction's history itself: reset at t = 0, extended
-        by every call; steps must come in order (0, 1, 2, ...). A :class:`SLACState` is used as
-        given instead. Checkpoints fall between interactions, so a resumed run rebuilds the
-        same histories.
-        """
-        if isinstance(state, SLACState):
-            return self._action(obs, state, key, deterministic)
-        if state.t == 0:
-            self._rollout_state = self.initial_state()
-        elif self._rollout_state is None or self._rollout_state.t != state.t:
-            have = None if self._rollout_state is None else self._rollout_state.t
-            raise ValueError(f"SLAC.policy_action got step t={state.t} but its history is at "
-                             f"t={have}; allowed: steps 0, 1, 2, ... of an interaction in order")
-        hist = self._rollout_state
-        a = self._action(obs, hist, key, deterministic)
-        self._rollout_state = self._advance(hist, obs, a)
-        return a
+class SLAC(SAC):
+    """Stochastic Latent Actor-Critic, the LILI paper's POMDP baseline (module docstring).
+
+    ``SLAC(env, AgentConfig(extra={"slac": {"model_every": 2}}))`` changes one option of
+    :data:`SLAC_OPTIONS`. Its acting state carries the interaction's history: start each
+    interaction with :meth:`initial_state` and pass on what :meth:`predict` returns.
+    """
+
+    algo = "slac"
+    core_cls = SLACCore
+
+    @property
+    def options(self) -> dict[str, Any]:
+        return self.core.options
+
+
+register("slac", SLAC)

@@ -21,14 +21,16 @@ class OracleObservation(gym.ObservationWrapper):
     def __init__(self, env: gym.Env) -> None:
         super().__init__(env)
         inner = env.unwrapped
-        if not hasattr(inner, "strategy_space"):
-            raise TypeError(
-                f"OracleObservation needs a RepeatedInteractionEnv with a strategy_space; "
-                f"got {type(inner).__name__}"
+        strat = getattr(inner, "strategy_space", None)
+        if not isinstance(strat, spaces.Box) or len(strat.shape) != 1:
+            raise ValueError(
+                f"the Oracle needs the partner's true strategy, and env {type(inner).__name__} "
+                f"has no flat Box `strategy_space` (got {strat!r}); allowed: an env that defines "
+                "strategy_space and info['strategy'] (every RepeatedInteractionEnv does)"
             )
-        obs_space, strat = env.observation_space, inner.strategy_space
+        obs_space = env.observation_space
         if not isinstance(obs_space, spaces.Box) or len(obs_space.shape) != 1:
-            raise TypeError(f"OracleObservation needs a flat Box observation; got {obs_space}")
+            raise ValueError(f"OracleObservation needs a flat Box observation; got {obs_space}")
         self.observation_space = spaces.Box(
             np.concatenate([obs_space.low, strat.low]).astype(np.float32),
             np.concatenate([obs_space.high, strat.high]).astype(np.float32),
@@ -38,6 +40,9 @@ class OracleObservation(gym.ObservationWrapper):
 
     def reset(self, **kwargs: Any):
         obs, info = self.env.reset(**kwargs)
+        if "strategy" not in info:
+            raise ValueError(f"the Oracle needs info['strategy'] from reset(); env "
+                             f"{type(self.env.unwrapped).__name__} gave keys {sorted(info)}")
         self._strategy = np.asarray(info["strategy"], dtype=np.float32)
         return self.observation(obs), info
 

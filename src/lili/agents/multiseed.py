@@ -1,0 +1,47 @@
+"""Many seeds in one program: the pure update block ``jax.vmap``-ed over stacked agent states.
+
+This is the path for accelerators, where one program that trains K seeds side by side keeps the
+device busy. On a CPU it gains nothing (measured on the 2-core machine: 3 seeds in one program
+took 2.84-2.88x the time of one), so the library's runs and ``lili reproduce`` train one seed per
+process there.
+
+Usage: build one agent per seed, each with its own buffer, then::
+
+    states = stack([a.state for a in agents])
+    arrays, counts = stack([b.arrays for b in buffers]), jnp.array([b.count for b in buffers])
+    states, metrics = update_blocks(agents[0].core, states, arrays, counts, keys)
+
+Every seed's block is exactly the single-seed :meth:`SACCore.block` (the test suite checks
+that two seeds in one program agree with two single-seed runs to float tolerance).
+"""
+
+from __future__ import annotations
+
+from functools import partial
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+
+from lili.agents.base import AgentState
+from lili.agents.sac import SACCore
+
+__all__ = ["stack", "unstack", "update_blocks"]
+
+
+def stack(trees: list[Any]) -> Any:
+    """Stack pytrees of the same structure along a new leading axis (one entry per seed)."""
+    return jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *trees)
+
+
+def unstack(tree: Any, n: int) -> list[Any]:
+    """The inverse of :func:`stack`."""
+    return [jax.tree_util.tree_map(lambda x, i=i: x[i], tree) for i in range(n)]
+
+
+@partial(jax.jit, static_argnums=0)
+def update_blocks(core: SACCore, states: AgentState, arrays: dict[str, jax.Array],
+                  counts: jax.Array, keys: jax.Array) -> tuple[AgentState, dict[str, jax.Array]]:
+    """One update block for every seed at once: ``core.block`` vmapped over the leading axis
+    of ``states``, ``arrays`` (each seed's buffer), ``counts`` and ``keys``."""
+    return jax.vmap(core.block)(states, arrays, counts, keys)
