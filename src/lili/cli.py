@@ -8,11 +8,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
-from typing import Any
-
-import yaml
+from typing import Any, NoReturn
 
 __all__ = ["main"]
 
@@ -21,44 +20,110 @@ class UsageError(ValueError):
     """A bad command-line value."""
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with its errors on one line (by default it prints the usage block first)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"lili: error: {message} (see {self.prog} --help)\n")
+
+
 def _parse_kwargs(items: list[str]) -> dict[str, Any]:
+    """``--env-kwarg KEY=VALUE`` items as a dict; VALUE is YAML (0.2, 1e-3, true, [1, 2]).
+
+    ``render_mode`` is refused: ``lili train`` renders nothing, and ``lili eval --video`` sets
+    ``rgb_array`` itself.
+    """
+    from lili.config import yaml_value
+
     out: dict[str, Any] = {}
     for item in items:
-        if "=" not in item:
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep or not key:
             raise UsageError(f"--env-kwarg {item!r} is invalid; allowed: KEY=VALUE")
-        k, v = item.split("=", 1)
-        out[k] = yaml.safe_load(v)
+        if key in out:
+            raise UsageError(f"--env-kwarg {key} is given twice ({key}={out[key]!r}, {item}); "
+                             "allowed: each KEY once")
+        if key == "render_mode":
+            raise UsageError(f"--env-kwarg {item} is not allowed: lili train renders nothing "
+                             "(lili eval --video records frames with render_mode='rgb_array')")
+        try:
+            out[key] = yaml_value(text)
+        except ValueError as e:
+            raise UsageError(f"--env-kwarg {item!r} is invalid: {e}") from None
     return out
 
 
+def _check_seed(seed: int, flag: str = "--seed") -> int:
+    """The one seed rule of the library (``lili.agents.check_seed``), for a flag."""
+    from lili.agents import check_seed
+
+    try:
+        return check_seed(seed, flag)
+    except ValueError as e:
+        raise UsageError(str(e)) from None
+
+
+def _check_out(path: str, flag: str) -> None:
+    """UsageError unless ``path`` is a folder or can be made one, before anything is written."""
+    p = Path(path)
+    for folder in (p, *p.parents):
+        if folder.exists():
+            if not folder.is_dir():
+                raise UsageError(f"{flag} {path!r} is invalid: {str(folder)!r} is a file; "
+                                 "allowed: a folder, existing or to be created")
+            if not os.access(folder, os.W_OK | os.X_OK):
+                raise UsageError(f"{flag} {path!r} is invalid: {str(folder)!r} is not "
+                                 "writable; allowed: a folder you can write to")
+            return
+
+
 def _make_env(env_id: str, kwargs: dict[str, Any], render_mode: str | None = None):
-    import gymnasium as gym
+    from lili.envs.checker import check_env_kwargs, load_env_class
 
-    import lili.envs  # noqa: F401 - registers the ids (``lili eval`` reaches here first)
-
+    factory = load_env_class(env_id)
+    check_env_kwargs(factory, kwargs, env_id)
     try:
         if render_mode is not None:
             kwargs = {**kwargs, "render_mode": render_mode}
-        return gym.make(env_id, **kwargs)
+        return factory(**kwargs)
     except TypeError as e:
         raise UsageError(f"env {env_id} does not accept these kwargs {kwargs}: {e}") from None
+    except ValueError as e:  # the env's own check of a value, e.g. step_noise='abc'
+        raise UsageError(f"env {env_id}: {e}") from None
+
+
+def _resolve_env(spec: str) -> str:
+    """The canonical name of an env spec: a registered id for an alias or id, else the
+    ``MODULE:CLASS`` / ``module:namespace/Id-v0`` spec itself (checked by importing it)."""
+    from lili.envs import ENV_ALIASES
+    from lili.envs.checker import load_env_class
+
+    load_env_class(spec)  # ValueError naming the spec when it is not an env
+    return ENV_ALIASES.get(spec, spec)
+
+
+def _strategy_dim(env: Any) -> int:
+    space = getattr(env.unwrapped, "strategy_space", None)
+    shape = getattr(space, "shape", None)
+    return int(shape[0]) if shape and len(shape) == 1 else 0
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from lili.agents import ALGOS, make_agent
+    from lili.agents import ALGOS, check_extra, make_agent
     from lili.config import AgentConfig, load_config
-    from lili.envs import resolve_env_id
-    from lili.runs import RunLogger, load_checkpoint, run_dir_for
-    from lili.train import train
+    from lili.runs import RunLogger, read_run_config, resume_run, run_dir_for
+    from lili.train import Stream, train
 
-    env_id = resolve_env_id(args.env)
+    env_id = _resolve_env(args.env)
     if args.algo not in ALGOS:
         raise UsageError(f"unknown algo {args.algo!r}; allowed: {', '.join(ALGOS)}")
     if args.interactions < 1:
         raise UsageError(f"--interactions {args.interactions} is invalid; allowed: an integer >= 1")
-    if args.seed < 0:
-        raise UsageError(f"--seed {args.seed} is invalid; allowed: an integer >= 0")
+    _check_seed(args.seed)
+    _check_out(args.out, "--out")
     config = load_config(args.config) if args.config else AgentConfig()
+    check_extra(config)
     env_kwargs = _parse_kwargs(args.env_kwarg)
     run_dir = run_dir_for(args.out, env_id, args.algo, args.seed)
     resolved = {"env": env_id, "env_kwargs": env_kwargs, "algo": args.algo, "seed": args.seed,
@@ -71,7 +136,7 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.resume and not exists:
         raise UsageError(f"--resume: there is no run to resume in {run_dir}")
     if args.resume:
-        old = yaml.safe_load((run_dir / "config.yaml").read_text())
+        old = read_run_config(run_dir)
         for key in ("env", "env_kwargs", "algo", "seed", "agent"):
             if old.get(key) != resolved[key]:
                 raise UsageError(f"--resume: {key} differs from the run in {run_dir} "
@@ -79,26 +144,32 @@ def cmd_train(args: argparse.Namespace) -> int:
 
     env = _make_env(env_id, env_kwargs)
     agent = make_agent(args.algo, env, config, args.seed)
-    start = 0
-    if args.resume and (run_dir / "checkpoints" / "latest.json").exists():
-        load_checkpoint(run_dir, agent)
-        start = agent.num_interactions
+    stream = Stream.for_agent(agent, agent.env)
+    strategy_dim = _strategy_dim(env)
+    # Everything is read and checked before the run folder is touched.
+    start = resume_run(run_dir, agent, stream, strategy_dim) if args.resume else 0
     remaining = args.interactions - start
     if remaining < 0:
         raise UsageError(f"--interactions {args.interactions} is below the {start} the run has "
                          "already done")
-    strategy_dim = int(env.unwrapped.strategy_space.shape[0])
+    agent.stream = stream
     logger = RunLogger(run_dir, resolved, strategy_dim, config.checkpoint_every, start)
     print(f"training {args.algo} on {env_id} (seed {args.seed}) -> {run_dir}"
           + (f" (resumed at interaction {start})" if start else ""))
+    if strategy_dim == 0:
+        print(f"note: {env_id} reports no partner strategy (no strategy_space / "
+              "info['strategy']): metrics.csv and reports will hold no strategy columns")
     try:
-        train(agent, remaining, progress=not args.no_progress, logger=logger)
+        train(agent, stream, remaining, progress=not args.no_progress, logger=logger)
     except KeyboardInterrupt:
         logger.close()
         print(f"interrupted; resume with the same command and --resume (from interaction "
-              f"{agent.num_interactions // config.checkpoint_every * config.checkpoint_every})")
+              f"{stream.count // config.checkpoint_every * config.checkpoint_every})")
         return 130
-    summary = logger.finish(agent, resolved)
+    except ValueError:
+        logger.close()
+        raise
+    summary = logger.finish(agent, stream, resolved)
     line = f"final return (last 10%): {summary['final_return']:.3f}"
     if summary["final_success"] is not None:
         line += f", success {summary['final_success']:.2f}"
@@ -107,25 +178,26 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
-    from lili.agents import CheckpointError, load_agent
+    from lili.agents import load_agent
     from lili.evaluate import evaluate
+    from lili.runs import latest_checkpoint, read_run_config
 
-    run_dir = Path(args.run)
-    cfg_path = run_dir / "config.yaml"
-    if not cfg_path.is_file():
-        raise UsageError(f"{run_dir} is not a run folder (config.yaml is missing)")
-    cfg = yaml.safe_load(cfg_path.read_text())
-    ptr = run_dir / "checkpoints" / "latest.json"
-    if not ptr.is_file():
-        raise CheckpointError(f"{run_dir} has no checkpoint to evaluate")
-    ck = run_dir / "checkpoints" / json.loads(ptr.read_text())["checkpoint"]
     if args.interactions < 1:
         raise UsageError(f"--interactions {args.interactions} is invalid; allowed: an integer >= 1")
+    _check_seed(args.seed)
+    if args.video:
+        from lili.video import LabelledFrames, check_video_path
+
+        check_video_path(args.video)
+    run_dir = Path(args.run)
+    cfg = read_run_config(run_dir)
+    ck, _ = latest_checkpoint(run_dir)
     env = _make_env(cfg["env"], cfg.get("env_kwargs", {}),
                     "rgb_array" if args.video else None)
     agent = load_agent(ck / "agent.msgpack", env)
     frames: list | None = [] if args.video else None
-    res = evaluate(agent, None, args.interactions, seed=args.seed, frames=frames)
+    res = evaluate(agent, LabelledFrames(env) if args.video else None, args.interactions,
+                   seed=args.seed, frames=frames)
     msg = f"{cfg['algo']} on {cfg['env']}: mean return {res['mean_return']:.3f} over " \
           f"{args.interactions} interactions"
     if res["success_rate"] is not None:
@@ -152,9 +224,25 @@ def cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_check_env(args: argparse.Namespace) -> int:
-    from lili.envs.checker import check_env, load_env_class
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    from lili.experiments import reproduce
 
+    reproduce(args.name, out=args.out or ("runs/reproduce-quick" if args.quick
+                                          else "runs/reproduce"),
+              seeds=args.seeds, interactions=args.interactions, jobs=args.jobs, ray=args.ray,
+              quick=args.quick, dry_run=args.dry_run,
+              algos=tuple(args.algos) if args.algos else None,
+              progress=False if args.no_progress else None)
+    return 0
+
+
+def cmd_check_env(args: argparse.Namespace) -> int:
+    from lili.envs.checker import MAX_INTERACTIONS, check_env, load_env_class
+
+    if not 2 <= args.interactions <= MAX_INTERACTIONS:
+        raise UsageError(f"--interactions {args.interactions} is invalid; allowed: an integer in "
+                         f"[2, {MAX_INTERACTIONS}]")
+    _check_seed(args.seed)
     factory = load_env_class(args.env)
     check_env(factory, n_interactions=args.interactions, seed=args.seed)
     print(f"{args.env}: passes Gymnasium's checker and the repeated-interaction contract")
@@ -170,7 +258,7 @@ def cmd_play(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     from lili.agents import ALGOS
 
-    p = argparse.ArgumentParser(prog="lili", description=__doc__.splitlines()[0])
+    p = _Parser(prog="lili", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
 
     t = sub.add_parser("train", help="train an agent and write a run folder")
@@ -200,9 +288,30 @@ def build_parser() -> argparse.ArgumentParser:
                    help="compare at one budget: use only each run's first N interactions")
     r.set_defaults(func=cmd_report)
 
+    from lili.experiments.presets import PRESETS
+
+    x = sub.add_parser("reproduce", help="rerun a figure or table of the paper and report it")
+    x.add_argument("name", help=f"preset: {', '.join(PRESETS)}")
+    x.add_argument("--seeds", type=int, help="seeds per run group (default: the preset's, 3)")
+    x.add_argument("--interactions", type=int, help="budget per run (default: the preset's)")
+    x.add_argument("--jobs", type=int, help="runs at a time (default 2 locally, all CPUs on Ray)")
+    x.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
+                   help="run on Ray: alone, a local instance; with ADDRESS, join that cluster")
+    x.add_argument("--quick", action="store_true",
+                   help="tiny budget, 1 seed: the whole pipeline in minutes")
+    x.add_argument("--algos", nargs="+", help="only these algos of the preset")
+    x.add_argument("--out", help="folder of every preset's runs (default runs/reproduce, "
+                   "runs/reproduce-quick with --quick)")
+    x.add_argument("--dry-run", action="store_true", help="list the runs and the CPU-hours")
+    x.add_argument("--no-progress", action="store_true", help="plain lines, no bars")
+    x.set_defaults(func=cmd_reproduce)
+
     c = sub.add_parser("check-env", help="check an env against the repeated-interaction contract")
     c.add_argument("env", help="MODULE:CLASS, or a registered id")
-    c.add_argument("--interactions", type=int, default=6)
+    from lili.envs.checker import DEFAULT_INTERACTIONS
+
+    c.add_argument("--interactions", type=int, default=DEFAULT_INTERACTIONS,
+                   help=f"interactions per run of the check (default {DEFAULT_INTERACTIONS})")
     c.add_argument("--seed", type=int, default=0)
     c.set_defaults(func=cmd_check_env)
 
@@ -217,10 +326,13 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``lili`` command."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as e:  # argparse's one-line errors (exit 2) and --help (exit 0)
+        return e.code if isinstance(e.code, int) else 2
     try:
         return int(args.func(args))
-    except (ValueError, FileNotFoundError) as e:  # UsageError, CheckpointError, EnvContractError
+    except (ValueError, OSError) as e:  # UsageError, CheckpointError, EnvContractError, I/O
         print(f"lili: error: {e}", file=sys.stderr)
         return 2
 
