@@ -54,6 +54,7 @@ class Blocker:
         self.source = source
         self.algo: str = agent.algo
         self.latent_dim: int = int(agent.latent_dim)
+        self.interactions: int = int(agent.num_interactions)
 
     @classmethod
     def load(cls, path: str | Path, env: gym.Env) -> Blocker:

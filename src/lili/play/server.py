@@ -86,7 +86,7 @@ def create_app(blocker: Blocker, env_kwargs: dict[str, Any], shots: int, recorde
                 await send({"type": "error", "error": f"server error: {e}"})
 
         init = {"type": "init", "shots": shots, "speed": speed, "algo": blocker.algo,
-                "source": blocker.source,
+                "source": blocker.source, "interactions": blocker.interactions,
                 "latent_dim": blocker.latent_dim, "table": _geometry(session.table.bank_shots),
                 "probe": None if probe is None else probe.summary(),
                 "belief": session.belief(), "score": session.score()}

@@ -49,7 +49,9 @@ class GameSession:
         self.shot = 0
         self.blocks = [0, 0, 0]
         self.by_mode = [0, 0, 0]
+        # Wall time of each decision step (action + physics) and of each latent update.
         self.step_seconds: list[float] = []
+        self.latent_seconds: list[float] = []
         m = self.table.model
         self._striker_q = [int(m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, n)])
                            for n in ("striker_x", "striker_y")]
@@ -99,7 +101,9 @@ class GameSession:
         puck_x, paddle_x = float(self.table.puck[0]), self.table.paddle_x
         # Every air hockey interaction starts from the same observation, so this interaction's
         # first one stands in for the next's (it feeds training targets only, not the latent).
+        start = time.perf_counter()
         self.game.end_interaction(first_obs)
+        self.latent_seconds.append(time.perf_counter() - start)
         self.shot += 1
         self.by_mode[mode] += 1
         self.blocks[mode] += int(blocked)

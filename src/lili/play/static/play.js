@@ -36,7 +36,8 @@
   function onInit(msg) {
     geo = msg.table;
     speed = msg.speed || 1;
-    document.getElementById("algo").textContent = `${msg.algo} (trained blocker)`;
+    document.getElementById("algo").textContent =
+      `${msg.algo} (blocker trained on ${msg.interactions} interactions)`;
     probe = msg.probe;
     const note = document.getElementById("probe-note");
     if (probe) {
@@ -50,6 +51,7 @@
     lili.total = msg.shots;
     showScore(msg.score);
     showBelief(msg.belief);
+    drawAims();
     cur = prev = { puck: geo.puck_start, paddle: 0, striker: [geo.puck_start[0],
       geo.puck_start[1] + geo.puck_radius + geo.paddle_radius + 0.01] };
     lili.ready = true;
@@ -142,6 +144,9 @@
       g.beginPath(); g.moveTo(0, py(a)); g.lineTo(c.width, py(a)); g.stroke();
     });
     g.setLineDash([]);
+    g.fillStyle = "#6b7280"; g.font = "11px system-ui, sans-serif"; g.textAlign = "right";
+    g.fillText("left", c.width - 4, py(geo.mode_aims[0]) - 3);
+    g.fillText("right", c.width - 4, py(geo.mode_aims[2]) - 3);
     lili.results.forEach((r, i) => {
       g.fillStyle = r.blocked ? "#1a9b5b" : "#c2362f";
       g.beginPath(); g.arc(px(i), py(r.aim), 4, 0, 2 * Math.PI); g.fill();
