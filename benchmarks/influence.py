@@ -9,7 +9,7 @@ influencer.
 Scripted rows: the mean return per interaction over the last ``--last`` of ``--scripted``
 interactions (Point Mass: 3000 and 2000, because its greedy target random-walks slowly),
 seeds 0-1, beside the value derived in each env's docstring. Learned rows: ``lili train``
-runs (one per algo and seed, ``--jobs`` at a time, skipped when finished, resumed when
+runs (one per algo and seed, one at a time, skipped when finished, resumed when
 interrupted) under ``runs/bench_influence/``, scored as the mean return over the last 10% of
 interactions of each seed, mean +- s.e. over seeds. Gap closed = (R - R_SAC) / (R_influencer -
 R_SAC). Writes ``benchmarks/results/influence.{json,md}``.
@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import subprocess
 import sys
 from pathlib import Path
 
@@ -50,18 +51,28 @@ def scripted_returns(env_id: str, interactions: int, last: int, seeds=(0, 1)) ->
     return out
 
 
-def learned_returns(env_id: str, algos: list[str], seeds: int, interactions: int, out: Path,
-                    jobs: int) -> dict:
-    """Train with ``lili train`` (the one adapter to the agents) and score the runs' metrics."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from _common import run_grid
+def train_run(env_id: str, algo: str, seed: int, interactions: int, out: Path) -> Path:
+    """The one adapter to the agents: a ``lili train`` run (skipped if done, else resumed)."""
+    run = out / env_id.split("/")[-1] / algo / f"seed_{seed}"
+    summary = run / "summary.json"
+    if summary.exists() and json.loads(summary.read_text())["interactions"] >= interactions:
+        return run
+    cmd = [str(Path(sys.executable).parent / "lili"), "train", env_id, "--algo", algo,
+           "--seed", str(seed), "--interactions", str(interactions), "--out", str(out),
+           "--no-progress"] + (["--resume"] if (run / "metrics.csv").exists() else [])
+    print(f"train {algo} seed {seed} on {env_id}", flush=True)
+    subprocess.run(cmd, check=True)
+    return run
 
-    run_grid(env_id, algos, seeds, interactions, out, jobs)
+
+def learned_returns(env_id: str, algos: list[str], seeds: int, interactions: int,
+                    out: Path) -> dict:
+    """Train every (algo, seed) and score the runs' ``metrics.csv``."""
     results = {}
     for algo in algos:
         finals = []
         for seed in range(seeds):
-            path = out / env_id.split("/")[-1] / algo / f"seed_{seed}" / "metrics.csv"
+            path = train_run(env_id, algo, seed, interactions, out) / "metrics.csv"
             with path.open() as f:
                 returns = [float(row["return"]) for row in csv.DictReader(f)]
             tail = max(1, len(returns) // 10)
@@ -95,13 +106,12 @@ def main() -> None:
     p.add_argument("--algos", nargs="*", default=[], help="learned agents (lili train)")
     p.add_argument("--interactions", type=int, default=600, help="per learned run")
     p.add_argument("--seeds", type=int, default=3, help="seeds per learned agent")
-    p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--out", default=str(ROOT / "runs" / "bench_influence"))
     p.add_argument("--name", default="influence", help="results file stem")
     args = p.parse_args()
     if not 1 <= args.last <= args.scripted:
         p.error(f"--last {args.last} is invalid; allowed: 1 to --scripted ({args.scripted})")
-    for flag in ("interactions", "seeds", "jobs"):
+    for flag in ("interactions", "seeds"):
         if getattr(args, flag) < 1:
             p.error(f"--{flag} {getattr(args, flag)} is invalid; allowed: an integer >= 1")
     from lili.agents import ALGOS
@@ -113,7 +123,7 @@ def main() -> None:
     for env_id in args.envs:
         scripted = scripted_returns(env_id, args.scripted, args.last)
         learned = (learned_returns(env_id, args.algos, args.seeds, args.interactions,
-                                   Path(args.out), args.jobs) if args.algos else {})
+                                   Path(args.out)) if args.algos else {})
         report[env_id] = {"scripted": scripted, "learned": learned}
         lines += table(env_id, scripted, learned)
         print("\n".join(table(env_id, scripted, learned)), flush=True)
