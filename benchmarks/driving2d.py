@@ -1,13 +1,11 @@
-"""Driving (2D) benchmark: SAC, Oracle, LILI and LILI (no influence), 3 seeds.
+"""Driving (2D) benchmark (Fig. 5): all six algos, success rate and return.
 
-    python benchmarks/driving2d.py [--interactions 1000] [--seeds 3] [--jobs 2]
+    python benchmarks/driving2d.py [--interactions 1000] [--seeds 3] [--jobs 2] [--algos ...]
 
-Prints final return and success rate over the last 10% of interactions (mean +- s.e. over seeds)
-beside the paper's description (LILI and Oracle near 100% success, SAC about 50% or below),
-writes ``benchmarks/results/driving2d.{json,md}`` and curves in ``<out>/report/``.
+The same as ``lili reproduce driving-2d``; see ``benchmarks/_preset.py``.
 """
 
-from _common import benchmark
+from _preset import benchmark
 
 if __name__ == "__main__":
-    benchmark("driving-2d", "driving2d", __doc__, interactions=1000)
+    benchmark("driving-2d", "driving2d", __doc__)

@@ -1,15 +1,11 @@
-"""Driving (steering) benchmark: SAC, Oracle and LILI on ``lili/DrivingSteer-v0``, 3 seeds.
+"""Driving (steering) benchmark, the paper's CARLA task (Fig. 5): all six algos.
 
-    python benchmarks/driving_steer.py [--interactions 1000] [--seeds 3] [--jobs 2]
+    python benchmarks/driving_steer.py [--interactions 1000] [--seeds 3] [--jobs 2] [--algos ...]
 
-Prints passing success over the last 10% of interactions (mean +- s.e. over seeds) and the wall
-time per run beside the paper's description of its CARLA task (Oracle and LILI converge to
-always passing; SAC about 50% by mixing lanes), writes
-``benchmarks/results/driving_steer.{json,md}`` and the curves.
+The same as ``lili reproduce driving-steer``; see ``benchmarks/_preset.py``.
 """
 
-from _common import benchmark
+from _preset import benchmark
 
 if __name__ == "__main__":
-    benchmark("driving-steer", "driving_steer", __doc__, interactions=1000,
-              algos=["sac", "oracle", "lili"])
+    benchmark("driving-steer", "driving_steer", __doc__)

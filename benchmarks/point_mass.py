@@ -1,14 +1,11 @@
-"""Point Mass benchmark: SAC, Oracle, LILI and LILI (no influence), 3 seeds, beside the paper.
+"""Point Mass benchmark (Fig. 4): SAC, SLAC, LILAC, LILI (no influence), LILI and the Oracle.
 
-    python benchmarks/point_mass.py [--interactions 2000] [--seeds 3] [--jobs 2]
+    python benchmarks/point_mass.py [--interactions 2000] [--seeds 3] [--jobs 2] [--algos ...]
 
-Prints final performance (mean +- s.e. over seeds of the mean return over the last 10% of
-interactions) beside the paper's Table (SAC -5.05, LILI -0.72, Oracle -0.54), writes
-``benchmarks/results/point_mass.{json,md}`` and the curves and target heatmap in
-``<out>/report/``.
+The same as ``lili reproduce point-mass``; see ``benchmarks/_preset.py``.
 """
 
-from _common import benchmark
+from _preset import benchmark
 
 if __name__ == "__main__":
-    benchmark("point-mass", "point_mass", __doc__, interactions=2000)
+    benchmark("point-mass", "point_mass", __doc__)

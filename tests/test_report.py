@@ -374,3 +374,84 @@ def test_upto_compares_runs_at_one_budget(tmp_path: Path) -> None:
 def test_bad_upto_raises(runs_dir: Path, upto) -> None:
     with pytest.raises(ValueError, match="upto must be a positive number"):
         find_runs([runs_dir], upto=upto)
+
+
+# ------------------------------------------------------------- files edited by hand, bad --out
+
+FULL_HEADER = ("interaction,return,length,success,strategy_0,strategy_1,strategy_id,critic_loss,"
+               "actor_loss,alpha,rep_loss,q,entropy,wall_time")
+
+
+def _train_like_run(root: Path, n: int = 30, header: str = FULL_HEADER) -> Path:
+    """A run folder as `lili train` writes it (config with 'agent', summary.json)."""
+    folder = root / "PointMass-v0" / "lili" / "seed_0"
+    folder.mkdir(parents=True)
+    cols = header.split(",")
+    rows = [",".join("0" if c != "interaction" else str(i) for c in cols) for i in range(n)]
+    (folder / "metrics.csv").write_text("\n".join([header, *rows]) + "\n")
+    (folder / "config.yaml").write_text(yaml.safe_dump(
+        {"env": PM, "algo": "lili", "seed": 0, "interactions": n, "agent": {"gamma": 0.99}}))
+    (folder / "summary.json").write_text(json.dumps({"interactions": n}))
+    return folder
+
+
+def test_train_like_run_loads(tmp_path: Path) -> None:
+    (run,) = find_runs([_train_like_run(tmp_path)])
+    assert run.n_interactions == 30
+
+
+def test_deleted_column_is_an_error(tmp_path: Path) -> None:
+    header = FULL_HEADER.replace(",rep_loss", "")
+    folder = _train_like_run(tmp_path, header=header)
+    with pytest.raises(ValueError, match="column\\(s\\) rep_loss were deleted") as info:
+        write_report([folder], tmp_path / "out")
+    assert str(folder / "metrics.csv") in str(info.value)
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(("drop", "message"), [
+    (range(10, 20), "interactions 10 to 19 are missing \\(line 12 jumps from 9 to 20\\)"),
+    (range(0, 3), "the first row is interaction 3, not 0"),
+    (range(25, 30), "has 25 rows but summary.json says the run did 30 interactions"),
+])
+def test_deleted_rows_are_an_error(tmp_path: Path, drop, message: str) -> None:
+    folder = _train_like_run(tmp_path)
+    lines = (folder / "metrics.csv").read_text().splitlines()
+    kept = [lines[0]] + [line for i, line in enumerate(lines[1:]) if i not in drop]
+    (folder / "metrics.csv").write_text("\n".join(kept) + "\n")
+    with pytest.raises(ValueError, match=message) as info:
+        find_runs([folder])
+    assert str(folder / "metrics.csv") in str(info.value)
+
+
+def test_upto_beyond_a_run_is_an_error(tmp_path: Path) -> None:
+    _write_run(tmp_path, PM, "lili", 0, n=300)
+    with pytest.raises(ValueError, match="--upto 5000 is more than .* \\(300 interactions\\);"
+                                         " allowed: 1 to 300"):
+        write_report([tmp_path], tmp_path / "out", upto=5000)
+    assert not (tmp_path / "out").exists()
+    assert find_runs([tmp_path], upto=300)[0].n_interactions == 300
+
+
+def test_report_out_is_a_file_is_an_error(tmp_path: Path) -> None:
+    from lili.cli import main
+
+    folder = _write_run(tmp_path, PM, "lili", 0)
+    target = tmp_path / "taken.txt"
+    target.write_text("keep me")
+    with pytest.raises(ValueError, match=f"--out {target} is invalid: {target} is a file"):
+        write_report([folder], target)
+    assert main(["report", str(folder), "--out", str(target / "sub")]) == 2
+    assert target.read_text() == "keep me"
+
+
+def test_heatmap_title_fits_the_figure(runs_dir: Path) -> None:
+    from lili.report.figures import heatmap_figure
+
+    runs = [r for r in find_runs([runs_dir]) if r.env == PM]
+    for subset in ([r for r in runs if r.algo == "lili"], runs):
+        fig = heatmap_figure(subset)
+        fig.canvas.draw()
+        box = fig._suptitle.get_window_extent()
+        width = fig.get_size_inches()[0] * fig.dpi
+        assert box.x0 >= 0 and box.x1 <= width, (box, width)

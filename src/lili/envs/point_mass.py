@@ -7,6 +7,16 @@ An interaction lasts H = 50 steps. Afterwards theta moves 0.2 rad clockwise if t
 position is inside the circle and 0.2 rad counter-clockwise otherwise. The origin is inside the
 circle, 0.05 below its top, so targets near the top are cheaper to reach: that is what an
 influencing agent exploits.
+
+The history experiment (Appendix E.2) words its majority rule the other way round ("moves
+counterclockwise if, in the majority of the last N interactions, the ego agent's final position
+is inside of the circle"), while the same table's N = 1 row is the original setting (its
+number, -0.7206, is the noise table's sigma = 0 row). The default (``inside_turn="clockwise"``)
+keeps the original rule for every N, so that N = 1 is the original task;
+``inside_turn="counterclockwise"`` is the history text's reading. The two are mirror images
+(reflect x: the circle and the start are symmetric, clockwise and counter-clockwise swap,
+inside and outside do not; only the grid of initial angles is not mirrored), so an agent's
+expected return is the same under either; the preset ``history-text-rule`` measures it.
 """
 
 from __future__ import annotations
@@ -17,13 +27,14 @@ from gymnasium import spaces
 from lili.envs.core import RepeatedInteractionEnv
 from lili.envs.partners import MajorityHistory, check_partner_options, noisy_step
 
-__all__ = ["PointMassEnv", "CirclePartner"]
+__all__ = ["PointMassEnv", "CirclePartner", "INSIDE_TURNS"]
 
 CENTER = np.array([0.0, -0.05], dtype=np.float64)
 RADIUS = 0.1
 STEP = 0.2
 BOUND = 0.15
 SPEED = 0.01
+INSIDE_TURNS = ("clockwise", "counterclockwise")
 
 
 class CirclePartner:
@@ -31,13 +42,21 @@ class CirclePartner:
 
     ``step_noise`` adds Gaussian noise to the step (sigma = ``step_noise * 0.2``); ``history``
     = N takes the direction from the majority of the last N outcomes (the paper's history
-    experiment; N = 1 is the original rule). The initial angle is drawn on the 0.2 grid.
+    experiment; N = 1 is the original rule). ``inside_turn`` is where the target moves when
+    the ego (the majority of the last N outcomes) ended inside: ``"clockwise"`` (the appendix's
+    Point Mass rule, the default) or ``"counterclockwise"`` (the history section's wording; see
+    the module docstring). The initial angle is drawn on the 0.2 grid.
     """
 
     strategy_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
 
-    def __init__(self, step_noise: float = 0.0, history: int = 1) -> None:
+    def __init__(self, step_noise: float = 0.0, history: int = 1,
+                 inside_turn: str = "clockwise") -> None:
         check_partner_options(step_noise, history)
+        if inside_turn not in INSIDE_TURNS:
+            raise ValueError(f"inside_turn={inside_turn!r} is invalid; allowed: "
+                             f"{', '.join(INSIDE_TURNS)}")
+        self.inside_sign = -1.0 if inside_turn == "clockwise" else 1.0
         self.step_noise = float(step_noise)
         self.votes = MajorityHistory(history)
         self.theta = 0.0
@@ -59,7 +78,8 @@ class CirclePartner:
         """``outcome`` is True when the ego ended the interaction inside the circle."""
         inside = bool(self.votes.push(bool(outcome)))
         step = noisy_step(STEP, self.step_noise, rng)
-        self.theta = float(np.mod(self.theta + (-step if inside else step), 2 * np.pi))
+        sign = self.inside_sign if inside else -self.inside_sign
+        self.theta = float(np.mod(self.theta + sign * step, 2 * np.pi))
 
 
 class PointMassEnv(RepeatedInteractionEnv):
@@ -75,12 +95,13 @@ class PointMassEnv(RepeatedInteractionEnv):
         history: int = 1,
         horizon: int = 50,
         render_mode: str | None = None,
+        inside_turn: str = "clockwise",
     ) -> None:
         super().__init__(render_mode)
         if isinstance(horizon, bool) or not isinstance(horizon, (int, np.integer)) or horizon < 1:
             raise ValueError(f"horizon={horizon!r} is invalid; allowed: an integer >= 1")
         self.horizon = int(horizon)
-        self.partner = CirclePartner(step_noise, history)
+        self.partner = CirclePartner(step_noise, history, inside_turn)
         self.observation_space = spaces.Box(-BOUND, BOUND, shape=(2,), dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         self.pos = np.zeros(2)

@@ -1,0 +1,17 @@
+"""Experiments: one preset per figure or table of the paper, and ``lili reproduce``.
+
+- :mod:`~lili.experiments.presets`: the registry (:data:`PRESETS`).
+- :mod:`~lili.experiments.plan`: a preset -> runs, each run's state on disk.
+- :mod:`~lili.experiments.costs`: measured per-run costs (``--dry-run``, ETA).
+- :mod:`~lili.experiments.runner`: the ``lili train`` command of a run (the one place that
+  calls training); :mod:`~lili.experiments.local` and :mod:`~lili.experiments.ray_backend`
+  execute it.
+- :mod:`~lili.experiments.results`: the preset's report (through :mod:`lili.report`).
+"""
+
+from lili.experiments.plan import RunSpec, plan, run_status
+from lili.experiments.presets import PRESETS, Group, Preset, get_preset
+from lili.experiments.reproduce import reproduce
+
+__all__ = ["PRESETS", "Group", "Preset", "RunSpec", "get_preset", "plan", "reproduce",
+           "run_status"]

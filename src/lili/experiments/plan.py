@@ -1,0 +1,163 @@
+"""Expand a preset into runs and find each run's state on disk (new, half-finished or done).
+
+Nothing here writes: :func:`plan` checks every run folder that already exists against the run
+it would become, so that a folder holding another config is one clear error before any process
+starts.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from lili.config import AgentConfig
+from lili.experiments.presets import PRESETS, Preset
+from lili.runs import run_dir_for
+
+__all__ = ["RunSpec", "plan", "run_status", "QUICK_INTERACTIONS", "QUICK_CONFIG"]
+
+QUICK_INTERACTIONS = 6
+# Learning starts after 2 random interactions and a checkpoint every 2, so that --quick goes
+# through every stage of a run (warm-up, updates, checkpoint, resume) in seconds.
+QUICK_CONFIG = {"warmup_interactions": 2, "checkpoint_every": 2}
+
+
+@dataclass(frozen=True, eq=False)
+class RunSpec:
+    """One ``lili train`` run: where it lives and everything its config.yaml will hold.
+
+    Compared and hashed by identity: :func:`plan` makes one object per run folder.
+    """
+
+    preset: str
+    folder: str
+    experiment: Path
+    env: str
+    algo: str
+    seed: int
+    interactions: int
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    config: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def run_dir(self) -> Path:
+        """The run folder (:func:`lili.runs.run_dir_for`)."""
+        return run_dir_for(self.experiment, self.env, self.algo, self.seed)
+
+    @property
+    def agent(self) -> dict[str, Any]:
+        """The resolved agent config, as ``lili train`` writes it into config.yaml."""
+        return AgentConfig.from_dict(self.config).to_dict()
+
+    @property
+    def name(self) -> str:
+        """Short display name: ``noise/sigma_0.2 lili seed 0``."""
+        return f"{self.folder} {self.algo} seed {self.seed}"
+
+
+def _expand_one(preset: Preset, out: Path, seeds: int, interactions: int | None,
+                algos: tuple[str, ...] | None, extra_config: dict[str, Any]) -> list[RunSpec]:
+    budget = interactions if interactions is not None else preset.interactions
+    specs = []
+    for seed in range(seeds):
+        for group in preset.groups:
+            for algo in group.algos:
+                if algos is not None and algo not in algos:
+                    continue
+                specs.append(RunSpec(preset=preset.name, folder=group.folder,
+                                     experiment=out / group.folder,
+                                     env=group.env, algo=algo, seed=seed, interactions=budget,
+                                     env_kwargs=dict(group.env_kwargs),
+                                     config={**group.config, **extra_config}))
+    return specs
+
+
+def plan(preset: Preset, out: str | Path, seeds: int | None = None,
+         interactions: int | None = None, algos: tuple[str, ...] | None = None,
+         quick: bool = False) -> list[RunSpec]:
+    """Every run of ``preset`` under ``out``, each once (presets share runs; see presets).
+
+    ``quick``: :data:`QUICK_INTERACTIONS` interactions, 1 seed and :data:`QUICK_CONFIG`, unless
+    ``seeds`` / ``interactions`` are given. ``algos`` keeps only those algos. Raises ValueError
+    for a bad value, or when an existing run folder holds another config.
+    """
+    if seeds is not None and (isinstance(seeds, bool) or seeds < 1):
+        raise ValueError(f"--seeds {seeds} is invalid; allowed: an integer >= 1")
+    if interactions is not None and (isinstance(interactions, bool) or interactions < 1):
+        raise ValueError(f"--interactions {interactions} is invalid; allowed: an integer >= 1")
+    if algos is not None:
+        unknown = [a for a in algos if a not in preset.algos]
+        if unknown:
+            raise ValueError(f"--algos {' '.join(unknown)} is not in preset {preset.name!r}; "
+                             f"allowed: {', '.join(preset.algos)}")
+    out = Path(out)
+    if quick:
+        seeds = 1 if seeds is None else seeds
+        interactions = QUICK_INTERACTIONS if interactions is None else interactions
+    parts = [PRESETS[n] for n in preset.includes] or [preset]
+    specs: dict[Path, RunSpec] = {}
+    for part in parts:
+        n_seeds = seeds if seeds is not None else part.seeds
+        for spec in _expand_one(part, out, n_seeds, interactions, algos,
+                                QUICK_CONFIG if quick else {}):
+            known = specs.get(spec.run_dir)
+            if known is None:
+                specs[spec.run_dir] = spec
+            elif (known.env_kwargs, known.config, known.interactions) != (
+                    spec.env_kwargs, spec.config, spec.interactions):
+                raise ValueError(f"presets {known.preset!r} and {spec.preset!r} define the run "
+                                 f"{spec.run_dir} differently")
+    result = list(specs.values())
+    for spec in result:
+        spec.agent  # noqa: B018 - validates the config overrides before anything runs
+        run_status(spec)
+    return result
+
+
+def run_status(spec: RunSpec) -> str:
+    """``"done"`` (summary.json at the budget), ``"resume"`` (a started run) or ``"new"``.
+
+    Raises ValueError naming the folder and the difference when the folder holds a run of
+    another env, env kwargs, algo, seed or agent config.
+    """
+    folder = spec.run_dir
+    if folder.exists() and not folder.is_dir():
+        raise ValueError(f"{folder} is a file; allowed: a run folder or nothing")
+    cfg_path = folder / "config.yaml"
+    if not (folder / "metrics.csv").exists():
+        return "new"
+    try:
+        old = yaml.safe_load(cfg_path.read_text())
+    except (OSError, yaml.YAMLError):
+        raise ValueError(f"{cfg_path} is missing or unreadable; the folder holds a run that "
+                         "reproduce cannot check: move it away or choose another --out") from None
+    want = {"env": spec.env, "env_kwargs": spec.env_kwargs, "algo": spec.algo,
+            "seed": spec.seed, "agent": spec.agent}
+    for key, value in want.items():
+        have = old.get(key) if isinstance(old, dict) else None
+        if have != value:
+            detail = _diff(have, value) if key == "agent" else f"{have!r} there, {value!r} here"
+            raise ValueError(f"{folder} holds a run of another config ({key}: {detail}); "
+                             "allowed: an --out whose runs match the preset (choose another "
+                             "--out or move the folder away)")
+    summary = folder / "summary.json"
+    if summary.is_file():
+        try:
+            done = int(json.loads(summary.read_text())["interactions"])
+        except (ValueError, KeyError, TypeError):
+            raise ValueError(f"{summary} is unreadable; allowed: JSON with 'interactions' as "
+                             "`lili train` writes it") from None
+        if done >= spec.interactions:
+            return "done"
+    return "resume"
+
+
+def _diff(have: Any, want: dict[str, Any]) -> str:
+    if not isinstance(have, dict):
+        return f"{have!r} there"
+    keys = sorted(k for k in set(have) | set(want) if have.get(k) != want.get(k))
+    return ", ".join(f"{k}={have.get(k)!r} there, {want.get(k)!r} here" for k in keys)

@@ -1,0 +1,156 @@
+"""One preset per figure or table of the paper: which runs it needs and what it reports.
+
+A preset is a list of :class:`Group` s (runs that share env, env kwargs and agent config, one per
+algo and seed) plus the budget, the seeds and the paper entry it sits beside (a key of
+:data:`lili.report.PAPER` for an env, or of :data:`lili.report.PAPER_TABLES` for the two
+appendix tables whose rows are partner variants). Groups name the experiment folder their runs
+live in, relative to ``--out``; groups of different presets that name the same folder and
+spec are the same runs, so the noise table's sigma = 0 row, the history table's N = 1 row and
+both tables' SAC and Oracle bounds are the Point Mass preset's runs, trained once.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = ["Group", "Preset", "PRESETS", "get_preset", "ALL_ALGOS"]
+
+ALL_ALGOS = ("sac", "slac", "lilac", "lili-no-influence", "lili", "oracle")
+PM = "lili/PointMass-v0"
+NOISE = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)
+HISTORY = (1, 3, 5, 7, 9, 11)
+
+
+@dataclass(frozen=True)
+class Group:
+    """Runs of ``algos`` on one env with one set of env kwargs and agent-config overrides.
+
+    ``folder`` is the experiment folder under ``--out`` (``lili train --out``); ``label`` and
+    ``value`` name the row in a variant table (``value`` is the partner parameter, e.g. sigma).
+    """
+
+    folder: str
+    env: str
+    algos: tuple[str, ...]
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    config: dict[str, Any] = field(default_factory=dict)
+    label: str = ""
+    value: float | int | None = None
+
+
+@dataclass(frozen=True)
+class Preset:
+    """One paper item: its runs (``groups`` x ``seeds``), budget, and what the report shows.
+
+    ``kind`` is ``"env"`` (learning curves and a table per env, ``lili report``'s) or
+    ``"table"`` (one row per partner variant beside :data:`lili.report.PAPER_TABLES`
+    [``table``]). ``includes`` lists the presets that ``paper`` is made of.
+    """
+
+    name: str
+    title: str
+    where: str
+    interactions: int
+    groups: tuple[Group, ...]
+    seeds: int = 3
+    kind: str = "env"
+    table: str | None = None
+    metric: str = "final return: mean over the last 10% of interactions per seed"
+    includes: tuple[str, ...] = ()
+
+    @property
+    def algos(self) -> tuple[str, ...]:
+        """Every algo any group of this preset runs, in first-seen order."""
+        return tuple(dict.fromkeys(a for g in self.groups for a in g.algos))
+
+
+def _env_preset(name: str, env: str, where: str, interactions: int, algos: tuple[str, ...],
+                title: str, metric: str | None = None) -> Preset:
+    return Preset(name=name, title=title, where=where, interactions=interactions,
+                  groups=(Group(folder=name, env=env, algos=algos),),
+                  metric=metric or Preset.metric)
+
+
+def _noise() -> Preset:
+    groups = [Group(folder="point-mass", env=PM, algos=("lili",), label="sigma = 0 (Point Mass)",
+                    value=0.0)]
+    for sigma in NOISE[1:]:
+        groups.append(Group(folder=f"noise/sigma_{sigma:g}", env=PM, algos=("lili",),
+                            env_kwargs={"step_noise": sigma}, label=f"sigma = {sigma:g}",
+                            value=sigma))
+    groups.append(Group(folder="point-mass", env=PM, algos=("sac", "oracle"), label="bounds"))
+    return Preset(name="noise", title="Point Mass, noisy partner (LILI)",
+                  where="Appendix E.1, Table 2", interactions=2000, groups=tuple(groups),
+                  kind="table", table="noise")
+
+
+def _history() -> Preset:
+    groups = [Group(folder="point-mass", env=PM, algos=("lili",), label="N = 1 (Point Mass)",
+                    value=1)]
+    for n in HISTORY[1:]:
+        groups.append(Group(folder=f"history/n_{n}", env=PM, algos=("lili",),
+                            env_kwargs={"history": n}, config={"history": n},
+                            label=f"N = {n}", value=n))
+    groups.append(Group(folder="point-mass", env=PM, algos=("sac", "oracle"), label="bounds"))
+    return Preset(name="history", title="Point Mass, partner that reacts to the last N "
+                  "interactions (LILI, encoder over the last N)",
+                  where="Appendix E.2, Table 3", interactions=2000, groups=tuple(groups),
+                  kind="table", table="history")
+
+
+def _history_text_rule() -> Preset:
+    """The history table under the other reading of the majority rule (not part of paper)."""
+    base = _history()
+    groups = [Group(folder=f"history-text-rule/n_{g.value}", env=PM, algos=("lili",),
+                    env_kwargs={"history": g.value, "inside_turn": "counterclockwise"},
+                    config={"history": g.value}, label=f"N = {g.value}", value=g.value)
+              for g in base.groups if g.value is not None]
+    return Preset(name="history-text-rule", title="Point Mass history table under Appendix "
+                  "E.2's wording of the rule (inside -> counter-clockwise)",
+                  where="Appendix E.2, Table 3 (the other reading)", interactions=2000,
+                  groups=tuple(groups), kind="table", table="history")
+
+
+def _build() -> dict[str, Preset]:
+    presets = [
+        _env_preset("point-mass", PM, "Fig. 4 (Sec. 5.2; curves, heatmap of the target over "
+                    "the last 500 interactions) and Table 2's sigma = 0, SAC and Oracle rows",
+                    2000, ALL_ALGOS, "Point Mass"),
+        _noise(),
+        _history(),
+        _env_preset("driving-2d", "lili/Driving2D-v0", "Fig. 5 (Sec. 5.2), Appendix D.2",
+                    1000, ALL_ALGOS, "Driving (2D)",
+                    "final return and success: mean over the last 10% of interactions"),
+        _env_preset("driving-steer", "lili/DrivingSteer-v0",
+                    "Fig. 5 (Sec. 5.2, Driving CARLA), Appendix D.3", 1000, ALL_ALGOS,
+                    "Driving (steering; the paper's CARLA task)",
+                    "final return and success: mean over the last 10% of interactions"),
+        _env_preset("lunar-lander", "lili/LunarLander-v0", "Fig. 5 (Sec. 5.2), Appendix D.1",
+                    2000, ALL_ALGOS, "Lunar Lander",
+                    "final return and landing success: mean over the last 10% of interactions"),
+        _env_preset("air-hockey", "lili/AirHockey-v0", "Fig. 6 (Sec. 5.3)", 1000,
+                    ("random", "sac", "lili-no-influence", "lili", "oracle"), "Air hockey",
+                    "block rate and reward per interaction over the last 10% (= the last 100 "
+                    "at 1000 interactions); striker's modes over the last 200"),
+        _history_text_rule(),
+    ]
+    table = {p.name: p for p in presets}
+    parts = ("point-mass", "noise", "history", "driving-2d", "driving-steer", "lunar-lander",
+             "air-hockey")
+    table["paper"] = Preset(
+        name="paper", title="Every figure and table of the paper's Sec. 5 and Appendix E",
+        where="Sec. 5, Appendix E", interactions=0,
+        groups=tuple(g for name in parts for g in table[name].groups), includes=parts)
+    return table
+
+
+PRESETS: dict[str, Preset] = _build()
+"""Every preset by name; ``paper`` is all of the paper's items (not ``history-text-rule``)."""
+
+
+def get_preset(name: str) -> Preset:
+    """The preset called ``name``, or ValueError naming it and the allowed names."""
+    if name not in PRESETS:
+        raise ValueError(f"unknown preset {name!r}; allowed: {', '.join(PRESETS)}")
+    return PRESETS[name]

@@ -1,0 +1,137 @@
+"""``lili reproduce``: expand a preset, skip finished runs, resume started ones, run the rest
+on local processes or Ray tasks, then write the preset's report."""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from lili.experiments.costs import estimate_seconds
+from lili.experiments.plan import RunSpec, plan, run_status
+from lili.experiments.presets import get_preset
+from lili.experiments.progress import SweepProgress
+from lili.experiments.runner import log_path, rows_logged, write_agent_configs
+
+__all__ = ["reproduce", "LOCAL_JOBS"]
+
+LOCAL_JOBS = 2
+RAY_LOCAL = "local"
+
+
+def _check_out(out: Path) -> None:
+    for folder in (out, *out.parents):
+        if folder.exists():
+            if not folder.is_dir():
+                raise ValueError(f"--out {out} is invalid: {folder} is a file; allowed: a folder")
+            if not os.access(folder, os.W_OK | os.X_OK):
+                raise ValueError(f"--out {out} is invalid: {folder} is not writable")
+            return
+
+
+def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: int,
+             say: Callable[[str], None]) -> dict[str, Any]:
+    todo = [s for s in specs if status[s] != "done"]
+    seconds = sum(estimate_seconds(s, rows_logged(s) if status[s] == "resume" else 0)
+                  for s in todo)
+    for s in specs:
+        say(f"{status[s]:6}  {s.run_dir}  ({s.interactions} interactions"
+            + (f", {s.env_kwargs}" if s.env_kwargs else "")
+            + (f", config {s.config}" if s.config else "") + ")")
+    by_preset: dict[str, float] = {}
+    for s in todo:
+        by_preset[s.preset] = by_preset.get(s.preset, 0.0) + estimate_seconds(s)
+    for preset, sec in by_preset.items():
+        say(f"  {preset}: {sec / 3600:.1f} CPU-hours")
+    say(f"{name}: {len(specs)} runs ({len(todo)} to run, {len(specs) - len(todo)} done); "
+        f"estimated {seconds / 3600:.1f} CPU-hours, about {seconds / 3600 / jobs:.1f} h of "
+        f"wall time with {jobs} jobs (from measured per-run costs, lili.experiments.costs)")
+    return {"runs": len(specs), "to_run": len(todo), "cpu_hours": seconds / 3600,
+            "by_preset": {k: v / 3600 for k, v in by_preset.items()}}
+
+
+def _make_backend(ray: str | None, jobs: int | None, out: Path):
+    if ray is None:
+        from lili.experiments.local import LocalBackend
+
+        return LocalBackend(jobs or LOCAL_JOBS)
+    from lili.experiments.ray_backend import RayBackend
+
+    return RayBackend(None if ray == RAY_LOCAL else ray, jobs, out)
+
+
+def _check_ray_importable() -> None:
+    from lili.experiments.ray_backend import _import_ray
+
+    _import_ray()
+
+
+def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None = None,
+              interactions: int | None = None, jobs: int | None = None,
+              ray: str | None = None, quick: bool = False, dry_run: bool = False,
+              algos: tuple[str, ...] | None = None, progress: bool | None = None,
+              say: Callable[[str], None] = print) -> dict[str, Any]:
+    """Run preset ``name`` into ``out`` and write ``out/<name>/report/``; see the module doc.
+
+    ``ray``: None (local processes), ``"local"`` (start Ray on this machine) or a cluster
+    address. Every value is checked and every existing run folder compared with the run it
+    would become before anything is written; a bad one raises ValueError naming it. Runs that
+    fail are listed (with their logs) in a ValueError after the others have finished.
+    """
+    preset = get_preset(name)
+    if jobs is not None and (isinstance(jobs, bool) or jobs < 1):
+        raise ValueError(f"--jobs {jobs} is invalid; allowed: an integer >= 1")
+    out = Path(out)
+    _check_out(out)
+    specs = plan(preset, out, seeds=seeds, interactions=interactions, algos=algos, quick=quick)
+    status = {s: run_status(s) for s in specs}
+    if dry_run:
+        return _dry_run(name, specs, status, jobs or LOCAL_JOBS, say)
+    if ray is not None:
+        _check_ray_importable()
+    todo = [s for s in specs if status[s] != "done"]
+    t0 = time.time()
+    if todo:
+        out.mkdir(parents=True, exist_ok=True)
+        backend = _make_backend(ray, jobs, out)
+        say(f"{name}: {len(specs)} runs, {len(specs) - len(todo)} done, {len(todo)} to run on "
+            f"{backend.description}")
+        failed = _run_all(backend, todo, len(specs) - len(todo), progress)
+        if failed:
+            lines = "\n".join(f"  {s.run_dir} (exit {c}; log {log_path(s)})" for s, c in failed)
+            raise ValueError(f"{len(failed)} of {len(todo)} runs failed:\n{lines}")
+    else:
+        say(f"{name}: all {len(specs)} runs are done")
+    from lili.experiments.results import write_preset_report
+
+    report = write_preset_report(preset, specs, out)
+    say(report["markdown"])
+    say(f"report: {report['dir']} ({time.time() - t0:.0f} s)")
+    return {"runs": len(specs), "ran": len(todo), "report": report}
+
+
+def _run_all(backend, todo: list[RunSpec], done: int,
+             progress: bool | None) -> list[tuple[RunSpec, int]]:
+    write_agent_configs(todo)
+    bar = SweepProgress(todo, done, live=progress)
+    queue, failed, running = list(todo), [], 0
+    try:
+        while queue or running:
+            while queue and running < backend.capacity:
+                spec = queue.pop(0)
+                bar.started(spec)
+                backend.submit(spec)
+                running += 1
+            for spec, code in backend.poll():
+                running -= 1
+                bar.ended(spec, code, backend.capacity)
+                if code != 0:
+                    failed.append((spec, code))
+            bar.refresh(backend.capacity)
+            time.sleep(0.5)
+    finally:
+        bar.stop()
+        backend.close()
+    return failed

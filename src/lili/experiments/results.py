@@ -1,0 +1,79 @@
+"""The report of a preset: ``<out>/<name>/report/`` with figures, ``results.md`` and JSON."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from lili.experiments.plan import RunSpec
+from lili.experiments.presets import PRESETS, Preset
+from lili.report import PAPER_TABLES, find_runs, write_report
+from lili.report.variants import plot_variants, variant_markdown, variant_rows
+from lili.report.write import check_out_dir, json_safe
+
+__all__ = ["write_preset_report"]
+
+
+def _header(preset: Preset, specs: list[RunSpec]) -> str:
+    budget = max(s.interactions for s in specs)
+    seeds = len({s.seed for s in specs})
+    return (f"## {preset.title} (`lili reproduce {preset.name}`)\n\nPaper: {preset.where}. "
+            f"Ours: {seeds} seed{'s' * (seeds > 1)}, {budget} interactions per run; "
+            f"{preset.metric}.\n\n")
+
+
+def _table_report(preset: Preset, specs: list[RunSpec], out: Path) -> dict[str, Any]:
+    runs = find_runs([s.run_dir for s in specs], upto=min(s.interactions for s in specs))
+    variants, bounds = [], []
+    for group in preset.groups:
+        mine = [r for r in runs if any(s.folder == group.folder and s.algo in group.algos
+                                       and s.run_dir.resolve() == r.path for s in specs)]
+        if group.value is None:
+            bounds += mine
+        elif mine:
+            variants.append((group.label, group.value, mine))
+    rows = variant_rows(variants, bounds, preset.table)
+    bounds_from = ("the Point Mass preset's runs (sigma = 0, N = 1)" if bounds
+                   else "not run (use --algos without a filter)")
+    markdown = variant_markdown(rows, preset.table, bounds_from)
+    out.mkdir(parents=True, exist_ok=True)
+    files = {"variants.png": str(plot_variants(rows, preset.table, out / "variants.png"))}
+    curves = write_report([r.path for r in runs], out / "curves", upto=runs[0].n_interactions)
+    files.update({f"curves/{k}": v for k, v in curves["files"].items()})
+    return {"rows": rows, "markdown": markdown, "files": files}
+
+
+def write_preset_report(preset: Preset, specs: list[RunSpec], out: Path) -> dict[str, Any]:
+    """Write ``out/<preset>/report/`` (and each part's report for ``paper``); return it."""
+    report_dir = check_out_dir(out / preset.name / "report")
+    parts = [PRESETS[n] for n in preset.includes] or [preset]
+    sections, payload = [], {}
+    for part in parts:
+        mine = [s for s in specs if s.preset == part.name]
+        if not mine:
+            continue
+        part_dir = out / part.name / "report"
+        if part.kind == "table":
+            result = _table_report(part, mine, part_dir)
+            payload[part.name] = {"rows": result["rows"], "files": result["files"],
+                                  "paper": PAPER_TABLES[part.table]}
+            (part_dir / "results.json").write_text(
+                json.dumps(json_safe(payload[part.name]), indent=1) + "\n")
+        else:  # write_report writes results.json (ours, the runs, the paper's numbers)
+            result = write_report([s.run_dir for s in mine], part_dir,
+                                  upto=min(s.interactions for s in mine))
+            payload[part.name] = {"summary": result["summary"], "files": result["files"]}
+        text = _header(part, mine) + result["markdown"]
+        (part_dir / "results.md").write_text(text, encoding="utf-8")
+        rel = Path("..") / ".." / part.name / "report" if part is not preset else Path(".")
+        figures = [f"![{name}]({rel / name})" for name in result["files"]
+                   if name.endswith(".png")]
+        sections.append(text + "\n" + "\n".join(figures) + "\n")
+    report_dir.mkdir(parents=True, exist_ok=True)
+    markdown = "\n".join(sections)
+    if preset.includes:
+        (report_dir / "results.md").write_text(f"# {preset.title}\n\n{markdown}",
+                                               encoding="utf-8")
+        (report_dir / "results.json").write_text(json.dumps(json_safe(payload), indent=1) + "\n")
+    return {"markdown": markdown, "results": payload, "dir": str(report_dir)}

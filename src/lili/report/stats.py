@@ -1,0 +1,182 @@
+"""Statistics over run folders: final performance per seed, mean +- s.e. over seeds, gap closed."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+
+from lili.report.files import Run
+from lili.report.paper import paper_reference
+from lili.report.style import algo_sort_key, env_sort_key
+
+__all__ = ["final_performance", "mean_se", "summarize", "group_runs", "moving_average",
+           "strategy_frequencies", "strategy_names", "STRATEGY_WINDOW", "gap_closed"]
+
+STRATEGY_WINDOW = 200
+
+
+def final_performance(run: Run, metric: str = "return", frac: float = 0.1) -> float:
+    """Mean of ``metric`` over the last ``frac`` of the run's interactions (at least one).
+
+    This is :func:`lili.runs.final_mean` over the metric's non-empty cells, the number that
+    ``summary.json`` holds. NaN when the metric has no value at all (e.g. ``success`` in an
+    env that defines none). Raises ValueError for an unknown metric, a
+    ``frac`` outside (0, 1] or a run without interactions.
+    """
+    if not 0.0 < frac <= 1.0:
+        raise ValueError(f"frac={frac!r} is invalid; allowed: 0 < frac <= 1")
+    if metric not in run.metrics:
+        raise ValueError(
+            f"{run.path}: no metric {metric!r}; available: {', '.join(run.metrics)}"
+        )
+    if run.n_interactions == 0:
+        raise ValueError(f"{run.path}: no interactions logged yet")
+    # Imported here: lili.runs pulls in the agents (JAX), which reading CSV files does not need.
+    from lili.runs import final_mean
+
+    values = run.metrics[metric]
+    values = values[~np.isnan(values)]
+    # The one definition of final performance, the one summary.json uses.
+    return final_mean(values.tolist(), frac) if values.size else math.nan
+
+
+def mean_se(values: Sequence[float]) -> tuple[float | None, float | None]:
+    """Mean and standard error (std ddof=1 / sqrt n; 0 with one value); None, None if empty."""
+    arr = np.asarray(values, dtype=np.float64)
+    if arr.size == 0:
+        return None, None
+    mean = float(arr.mean())
+    se = float(arr.std(ddof=1) / math.sqrt(arr.size)) if arr.size > 1 else 0.0
+    return mean, se
+
+
+def group_runs(runs: Iterable[Run]) -> dict[str, dict[str, list[Run]]]:
+    """env -> algo -> runs (with at least one interaction), envs and algos in display order."""
+    groups: dict[str, dict[str, list[Run]]] = {}
+    for run in runs:
+        if run.n_interactions == 0:
+            continue
+        groups.setdefault(run.env, {}).setdefault(run.algo, []).append(run)
+    return {
+        env: {algo: sorted(by_algo[algo], key=lambda r: r.seed)
+              for algo in sorted(by_algo, key=algo_sort_key)}
+        for env, by_algo in sorted(groups.items(), key=lambda kv: env_sort_key(kv[0]))
+    }
+
+
+def summarize(runs: Iterable[Run], frac: float = 0.1) -> list[dict[str, Any]]:
+    """One dict per (env, algo), envs sorted and algos in a fixed order.
+
+    Keys: ``env``, ``algo``, ``n`` (seeds), ``seeds``, ``interactions_min`` /
+    ``interactions_max`` (interactions logged), ``budget`` (largest configured budget or None),
+    ``return_mean`` / ``return_se`` / ``returns`` (final return per seed, see
+    :func:`final_performance`), ``success_mean`` / ``success_se`` / ``successes`` (None when the
+    env defines no success), ``gap_closed`` = (R - R_sac) / (R_oracle - R_sac) on the mean final
+    returns (None unless SAC and Oracle both ran on the env and differ), ``paper_return`` and
+    ``paper_gap_closed`` (None when the paper gives no number) and ``paper_text`` (None or the
+    paper's qualitative statement), ``wall_time_mean`` (seconds per run, None without a
+    ``wall_time`` column), ``paper_success`` (None or the paper's success rate) and
+    ``strategy_freq`` (see :func:`strategy_frequencies`; None without strategy ids).
+    s.e. = std(ddof=1) / sqrt(n), 0 with one seed. Runs with no
+    interaction logged yet are left out.
+    """
+    rows: list[dict[str, Any]] = []
+    for env, by_algo in group_runs(runs).items():
+        paper = paper_reference(env) or {}
+        paper_returns = paper.get("return", {})
+        env_rows = []
+        for algo, group in by_algo.items():
+            returns = [final_performance(r, "return", frac) for r in group]
+            successes = [final_performance(r, "success", frac) for r in group if r.has_success]
+            successes = [s for s in successes if not math.isnan(s)]
+            r_mean, r_se = mean_se(returns)
+            s_mean, s_se = mean_se(successes)
+            budgets = [r.budget for r in group if r.budget is not None]
+            walls = [float(r.metrics["wall_time"][-1]) for r in group
+                     if r.has_metric("wall_time")]
+            freq = strategy_frequencies(group)
+            env_rows.append({
+                "env": env,
+                "algo": algo,
+                "n": len(group),
+                "seeds": [r.seed for r in group],
+                "interactions_min": min(r.n_interactions for r in group),
+                "interactions_max": max(r.n_interactions for r in group),
+                "budget": max(budgets) if budgets else None,
+                "return_mean": r_mean,
+                "return_se": r_se,
+                "returns": returns,
+                "success_mean": s_mean,
+                "success_se": s_se,
+                "successes": successes if successes else None,
+                "gap_closed": None,
+                "paper_return": paper_returns.get(algo),
+                "paper_gap_closed": gap_closed(paper_returns, algo),
+                "paper_text": paper.get("success_text", {}).get(algo),
+                "wall_time_mean": float(np.mean(walls)) if walls else None,
+                "paper_success": paper.get("success", {}).get(algo),
+                "strategy_freq": None if freq is None else freq.tolist(),
+            })
+        means = {row["algo"]: row["return_mean"] for row in env_rows}
+        for row in env_rows:
+            row["gap_closed"] = gap_closed(means, row["algo"])
+        rows.extend(env_rows)
+    return rows
+
+
+def gap_closed(returns: dict[str, float], algo: str) -> float | None:
+    """(R_algo - R_SAC) / (R_Oracle - R_SAC), or None without both baselines or when they tie."""
+    if algo not in returns or "sac" not in returns or "oracle" not in returns:
+        return None
+    denom = returns["oracle"] - returns["sac"]
+    if denom == 0:
+        return None
+    return float((returns[algo] - returns["sac"]) / denom)
+
+
+def moving_average(values: np.ndarray, window: int) -> np.ndarray:
+    """Trailing moving average; the window is shortened at the start; NaNs are skipped."""
+    if window < 1:
+        raise ValueError(f"window={window!r} is invalid; allowed: an integer >= 1")
+    values = np.asarray(values, dtype=np.float64)
+    valid = ~np.isnan(values)
+    csum = np.concatenate([[0.0], np.cumsum(np.where(valid, values, 0.0))])
+    ccount = np.concatenate([[0], np.cumsum(valid)])
+    idx = np.arange(values.size)
+    lo = np.maximum(0, idx - window + 1)
+    total = csum[idx + 1] - csum[lo]
+    count = ccount[idx + 1] - ccount[lo]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(count > 0, total / np.maximum(count, 1), np.nan)
+
+
+def strategy_frequencies(runs: Iterable[Run], last: int = STRATEGY_WINDOW) -> np.ndarray | None:
+    """How often the partner played each discrete strategy over the last ``last`` interactions.
+
+    Pools the runs given (e.g. the seeds of one algo); returns fractions indexed by
+    ``strategy_id`` (length = largest id seen + 1), or None when no run logs an id >= 0.
+    """
+    counts: list[np.ndarray] = []
+    for run in runs:
+        ids = run.metrics.get("strategy_id")
+        if ids is None:
+            continue
+        ids = ids[-last:]
+        ids = ids[~np.isnan(ids) & (ids >= 0)].astype(int)
+        if ids.size:
+            counts.append(np.bincount(ids))
+    if not counts:
+        return None
+    total = np.zeros(max(len(c) for c in counts))
+    for c in counts:
+        total[: len(c)] += c
+    return total / total.sum()
+
+
+def strategy_names(env: str, n: int) -> list[str]:
+    """Names of strategies 0..n-1 (the paper's where known, else ``id k``)."""
+    names = (paper_reference(env) or {}).get("strategy_names", [])
+    return [names[k] if k < len(names) else f"id {k}" for k in range(n)]

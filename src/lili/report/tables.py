@@ -1,0 +1,100 @@
+"""Markdown tables: ours (mean +- s.e. over seeds) beside the paper's numbers."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from lili.report.paper import paper_reference
+from lili.report.stats import STRATEGY_WINDOW, strategy_names
+from lili.report.style import algo_label, env_title
+
+__all__ = ["markdown_table", "fmt_mean_se", "fmt_duration"]
+
+
+def fmt_mean_se(value: float | None, se: float | None, spec: str = ".2f", pct: bool = False) -> str:
+    """``-1.00 ± 0.29`` (or a percentage), ``—`` when there is no value."""
+    if value is None:
+        return "—"
+    if pct:
+        return f"{100 * value:.1f}% ± {100 * (se or 0.0):.1f}%"
+    return f"{value:{spec}} ± {(se or 0.0):{spec}}"
+
+
+def fmt_duration(seconds: float | None) -> str:
+    """Seconds below two minutes, minutes above; ``—`` when unknown."""
+    if seconds is None:
+        return "—"
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min"
+
+
+def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
+    """Markdown with one table per env.
+
+    ``summary`` is the list from :func:`summarize` or the dict that :func:`write_report`
+    returns (its ``"summary"`` is used). Columns: algo | seeds | final return (mean ± s.e.) |
+    success (mean ± s.e. or —) | gap closed | paper | wall time per run. Below each table: the
+    paper's source, or its statement where it gives no numbers.
+    """
+    if isinstance(summary, dict):
+        if "summary" not in summary:
+            raise ValueError("markdown_table needs summarize(...) or write_report(...)'s result")
+        summary = summary["summary"]
+    by_env: dict[str, list[dict[str, Any]]] = {}
+    for row in summary:
+        by_env.setdefault(row["env"], []).append(row)
+    parts: list[str] = []
+    for env, rows in by_env.items():
+        lines = [
+            f"### {env_title(env)}",
+            "",
+            "| algo | seeds | final return (mean ± s.e.) | success (mean ± s.e.) "
+            "| gap closed | paper | wall time / run |",
+            "|---|---:|---:|---:|---:|---|---:|",
+        ]
+        for row in rows:
+            gap = "—" if row["gap_closed"] is None else f"{row['gap_closed']:.2f}"
+            cited = []
+            if row.get("paper_return") is not None:
+                cited.append(f"{row['paper_return']:.2f}")
+                if row.get("paper_gap_closed") is not None and row["algo"] not in ("sac", "oracle"):
+                    cited[-1] += f" (gap {row['paper_gap_closed']:.2f})"
+            if row.get("paper_success") is not None:
+                cited.append(f"success {100 * row['paper_success']:.0f}%")
+            elif row.get("paper_text"):
+                cited.append(f"success {row['paper_text']}")
+            paper = ", ".join(cited) or "—"
+            interactions = row.get("interactions_min")
+            seeds = f"{row['n']}"
+            if interactions is not None and row.get("budget") and interactions < row["budget"]:
+                seeds += f" ({interactions}/{row['budget']} int.)"
+            lines.append(
+                f"| {algo_label(row['algo'])} | {seeds} "
+                f"| {fmt_mean_se(row['return_mean'], row['return_se'])} "
+                f"| {fmt_mean_se(row['success_mean'], row['success_se'], pct=True)} "
+                f"| {gap} | {paper} | {fmt_duration(row.get('wall_time_mean'))} |"
+            )
+        ref = paper_reference(env) or {}
+        notes = []
+        if "strategy_names" in ref:
+            for row in rows:
+                if row.get("strategy_freq"):
+                    names = strategy_names(env, len(row["strategy_freq"]))
+                    shares = ", ".join(f"{name} {100 * f:.0f}%"
+                                       for name, f in zip(names, row["strategy_freq"], strict=True))
+                    notes.append(f"{algo_label(row['algo'])}: partner played {shares} over the "
+                                 f"last {STRATEGY_WINDOW} interactions.")
+        if "return" in ref:
+            over = f" over {ref['seeds']} seeds" if "seeds" in ref else ""
+            notes.append(f"Paper: final return{over} ({ref['source']}).")
+        if "text" in ref:
+            notes.append(f"Paper: {ref['text']}.")
+        upto = rows[0].get("upto")
+        window = f"the first {upto} interactions" if upto else "interactions"
+        notes.append(
+            f"Final = mean over the last 10% of {window} per seed; s.e. over seeds; "
+            "gap closed = (R − R_SAC) / (R_Oracle − R_SAC)."
+        )
+        lines += ["", *notes]
+        parts.append("\n".join(lines))
+    return "\n\n".join(parts) + "\n"

@@ -1,0 +1,110 @@
+"""The appendix tables whose rows are partner variants (noise level, history length).
+
+Each row is one variant's LILI runs; SAC and the Oracle are the bounds. Ours (mean +- s.e. over
+seeds of :func:`~lili.report.stats.final_performance`) sit beside
+:data:`~lili.report.paper.PAPER_TABLES`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lili.report.files import Run
+from lili.report.paper import PAPER_TABLES
+from lili.report.stats import final_performance, mean_se
+from lili.report.style import DPI, algo_color, algo_label
+from lili.report.tables import fmt_mean_se
+
+__all__ = ["variant_rows", "variant_markdown", "plot_variants"]
+
+Variant = tuple[str, Any, Sequence[Run]]
+
+
+def variant_rows(variants: Sequence[Variant], bounds: Sequence[Run], table: str,
+                 frac: float = 0.1) -> list[dict[str, Any]]:
+    """One dict per variant (``label``, ``value``, runs) and per bound algo (SAC, Oracle).
+
+    Keys: ``label``, ``value`` (None for a bound), ``algo``, ``n``, ``seeds``, ``returns``,
+    ``return_mean``, ``return_se``, ``interactions`` (fewest logged), ``paper_mean`` and
+    ``paper_se`` (None where the paper has no such row). Raises ValueError for an unknown
+    ``table``.
+    """
+    if table not in PAPER_TABLES:
+        raise ValueError(f"unknown paper table {table!r}; allowed: {', '.join(PAPER_TABLES)}")
+    ref = PAPER_TABLES[table]
+    rows = []
+
+    def row(label: str, value: Any, algo: str, runs: Sequence[Run], paper) -> dict[str, Any]:
+        runs = [r for r in runs if r.n_interactions]
+        returns = [final_performance(r, "return", frac) for r in runs]
+        mean, se = mean_se(returns)
+        return {"label": label, "value": value, "algo": algo, "n": len(runs),
+                "seeds": sorted(r.seed for r in runs), "returns": returns,
+                "return_mean": mean, "return_se": se,
+                "interactions": min((r.n_interactions for r in runs), default=0),
+                "paper_mean": None if paper is None else paper[0],
+                "paper_se": None if paper is None else paper[1]}
+
+    for label, value, runs in variants:
+        rows.append(row(label, value, ref["algo"], runs, ref["rows"].get(value)))
+    for algo in ("sac", "oracle"):
+        runs = [r for r in bounds if r.algo == algo]
+        if runs:
+            rows.append(row(algo_label(algo), None, algo, runs, ref["bounds"].get(algo)))
+    return rows
+
+
+def variant_markdown(rows: Sequence[dict[str, Any]], table: str, bounds_from: str) -> str:
+    """A markdown table of :func:`variant_rows`, with the paper's source and what differs."""
+    ref = PAPER_TABLES[table]
+    lines = [f"### {ref['title']}", "",
+             f"| {ref['parameter_label']} | algo | seeds | final return (mean ± s.e.) "
+             "| paper (mean ± s.e.) |",
+             "|---|---|---:|---:|---:|"]
+    for r in rows:
+        value = "—" if r["value"] is None else f"{r['value']:g}"
+        lines.append(f"| {value} | {algo_label(r['algo'])} | {r['n']} "
+                     f"| {fmt_mean_se(r['return_mean'], r['return_se'])} "
+                     f"| {fmt_mean_se(r['paper_mean'], r['paper_se'], '.4g')} |")
+    lines += ["", f"Paper: {ref['source']}. Bounds: {ref['bounds_note']}; ours are {bounds_from}.",
+              "Final = mean over the last 10% of interactions per seed; s.e. over seeds."]
+    return "\n".join(lines) + "\n"
+
+
+def plot_variants(rows: Sequence[dict[str, Any]], table: str, out_png: str | Path) -> Path:
+    """Final return against the partner parameter: ours and the paper's, with s.e. bars."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    ref = PAPER_TABLES[table]
+    var = [r for r in rows if r["value"] is not None and r["return_mean"] is not None]
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
+    xs = np.array([r["value"] for r in var], dtype=float)
+    ax.errorbar(xs, [r["return_mean"] for r in var], [r["return_se"] for r in var],
+                color=algo_color("lili"), marker="o", capsize=3, label="LILI (ours)")
+    paper = sorted(ref["rows"].items())
+    ax.errorbar([k for k, _ in paper], [v[0] for _, v in paper], [v[1] for _, v in paper],
+                color=algo_color("lili"), marker="s", ls="--", alpha=0.6, capsize=3,
+                label="LILI (paper)")
+    for r in rows:
+        if r["value"] is None and r["return_mean"] is not None:
+            ax.axhline(r["return_mean"], color=algo_color(r["algo"]), lw=1.2,
+                       label=f"{algo_label(r['algo'])} (ours)")
+    for algo, (mean, _se) in ref["bounds"].items():
+        ax.axhline(mean, color=algo_color(algo), lw=1.0, ls="--", alpha=0.6,
+                   label=f"{algo_label(algo)} (paper)")
+    ax.set_xlabel(ref["parameter_label"])
+    ax.set_ylabel("final return per interaction")
+    ax.set_title(ref["title"], fontsize=11)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="best", framealpha=0.85)
+    out_png = Path(out_png)
+    fig.savefig(out_png, dpi=DPI)
+    plt.close(fig)
+    return out_png
