@@ -236,18 +236,6 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_reproduce(args: argparse.Namespace) -> int:
-    from lili.experiments import reproduce
-
-    reproduce(args.name, out=args.out or ("runs/reproduce-quick" if args.quick
-                                          else "runs/reproduce"),
-              seeds=args.seeds, interactions=args.interactions, jobs=args.jobs, ray=args.ray,
-              quick=args.quick, dry_run=args.dry_run,
-              algos=tuple(args.algos) if args.algos else None,
-              progress=False if args.no_progress else None)
-    return 0
-
-
 def cmd_check_env(args: argparse.Namespace) -> int:
     from lili.envs.checker import MAX_INTERACTIONS, check_env, load_env_class
 
@@ -299,24 +287,6 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--upto", type=int, metavar="N",
                    help="compare at one budget: use only each run's first N interactions")
     r.set_defaults(func=cmd_report)
-
-    from lili.experiments.presets import PRESETS
-
-    x = sub.add_parser("reproduce", help="rerun a figure or table of the paper and report it")
-    x.add_argument("name", help=f"preset: {', '.join(PRESETS)}")
-    x.add_argument("--seeds", type=int, help="seeds per run group (default: the preset's, 3)")
-    x.add_argument("--interactions", type=int, help="budget per run (default: the preset's)")
-    x.add_argument("--jobs", type=int, help="runs at a time (default 2 locally, all CPUs on Ray)")
-    x.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
-                   help="run on Ray: alone, a local instance; with ADDRESS, join that cluster")
-    x.add_argument("--quick", action="store_true",
-                   help="tiny budget, 1 seed: the whole pipeline in minutes")
-    x.add_argument("--algos", nargs="+", help="only these algos of the preset")
-    x.add_argument("--out", help="folder of every preset's runs (default runs/reproduce, "
-                   "runs/reproduce-quick with --quick)")
-    x.add_argument("--dry-run", action="store_true", help="list the runs and the CPU-hours")
-    x.add_argument("--no-progress", action="store_true", help="plain lines, no bars")
-    x.set_defaults(func=cmd_reproduce)
 
     from lili.experiments.presets import PRESETS
 
