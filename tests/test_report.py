@@ -130,8 +130,12 @@ def test_final_performance_uses_at_least_one_interaction(tmp_path: Path) -> None
     )
     _write_run(tmp_path, PM, "sac", 0, csv=csv)
     (run,) = find_runs([tmp_path])
-    assert final_performance(run) == 4.0  # 10% of 5 rounds down to 0 -> 1 interaction
-    assert final_performance(run, frac=0.5) == 3.5  # last 2
+    assert final_performance(run) == 4.0  # 10% of 5 is less than 1 -> 1 interaction
+    # The window is lili.runs' (the one summary.json uses): the last 3 of 5 at frac 0.5.
+    from lili.runs import final_window
+
+    k = final_window(5, 0.5)
+    assert final_performance(run, frac=0.5) == np.mean(np.arange(5.0)[-k:]) == 3.0
 
 
 def test_summarize_numbers(runs_dir: Path) -> None:

@@ -3,7 +3,6 @@ on local processes or Ray tasks, then write the preset's report."""
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -14,21 +13,12 @@ from lili.experiments.plan import RunSpec, plan, run_status
 from lili.experiments.presets import get_preset
 from lili.experiments.progress import SweepProgress
 from lili.experiments.runner import log_path, rows_logged, write_agent_configs
+from lili.report.write import check_out_dir
 
 __all__ = ["reproduce", "LOCAL_JOBS"]
 
 LOCAL_JOBS = 2
 RAY_LOCAL = "local"
-
-
-def _check_out(out: Path) -> None:
-    for folder in (out, *out.parents):
-        if folder.exists():
-            if not folder.is_dir():
-                raise ValueError(f"--out {out} is invalid: {folder} is a file; allowed: a folder")
-            if not os.access(folder, os.W_OK | os.X_OK):
-                raise ValueError(f"--out {out} is invalid: {folder} is not writable")
-            return
 
 
 def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: int,
@@ -84,7 +74,7 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     if jobs is not None and (isinstance(jobs, bool) or jobs < 1):
         raise ValueError(f"--jobs {jobs} is invalid; allowed: an integer >= 1")
     out = Path(out)
-    _check_out(out)
+    check_out_dir(out)
     specs = plan(preset, out, seeds=seeds, interactions=interactions, algos=algos, quick=quick)
     status = {s: run_status(s) for s in specs}
     if dry_run:

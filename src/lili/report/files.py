@@ -183,12 +183,9 @@ def _check_rows(path: Path, interaction: np.ndarray) -> None:
 
 def _expected_columns(header: list[str]) -> list[str]:
     """The columns `lili train` writes (``lili.runs.RunLogger``), for this run's strategy size."""
-    from lili.runs import METRIC_COLUMNS
+    from lili.runs import metric_columns
 
-    n_strategy = sum(1 for c in header if _STRATEGY_RE.match(c))
-    strategy = [f"strategy_{j}" for j in range(max(n_strategy, 1))]
-    return ["interaction", "return", "length", "success", *strategy, "strategy_id",
-            *METRIC_COLUMNS, "wall_time"]
+    return metric_columns(max(1, sum(1 for c in header if _STRATEGY_RE.match(c))))
 
 
 def _check_against_run(run: Run) -> None:

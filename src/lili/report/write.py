@@ -45,7 +45,7 @@ def check_out_dir(out_dir: str | Path) -> Path:
         if folder.exists():
             if not folder.is_dir():
                 raise ValueError(f"--out {out_dir} is invalid: {folder} is a file; allowed: a "
-                                 "folder (new or existing) for the report")
+                                 "folder (new or existing)")
             if not os.access(folder, os.W_OK | os.X_OK):
                 raise ValueError(f"--out {out_dir} is invalid: {folder} is not writable")
             break
