@@ -17,8 +17,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["Blocker", "BlockerGame", "SHIPPED_AGENT", "agent_file_for_run", "train_and_save",
-           "interaction_steps"]
+__all__ = ["Blocker", "BlockerGame", "SHIPPED_AGENT", "agent_file_for_run", "make_play_env",
+           "train_and_save", "interaction_steps"]
 
 SHIPPED_AGENT = Path(__file__).with_name("agents") / "air_hockey.msgpack"
 
@@ -149,3 +149,13 @@ def train_and_save(algo: str, interactions: int, seed: int, out: str | Path,
     agent = make_agent(algo, env, config, seed)
     agent.learn(interactions, progress=progress)
     return agent.save(out)
+
+
+def make_play_env(env_kwargs: dict[str, Any]) -> gym.Env:
+    """The air hockey env of training with ``env_kwargs`` (ValueError when they do not fit)."""
+    import lili.envs  # noqa: F401 - registers the ids
+
+    try:
+        return gym.make("lili/AirHockey-v0", **env_kwargs)
+    except TypeError as e:
+        raise ValueError(f"air hockey does not accept the env kwargs {env_kwargs}: {e}") from None

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from lili.play.policy import Blocker, interaction_steps
+from lili.play.policy import Blocker, interaction_steps, make_play_env
 
 __all__ = ["ModeProbe", "collect_latents"]
 
@@ -22,8 +22,6 @@ __all__ = ["ModeProbe", "collect_latents"]
 def collect_latents(blocker: Blocker, env_kwargs: dict[str, Any], n: int,
                     seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Latents z^i (n x d) and the striker's modes of interaction i (n) in the training env."""
-    from lili.play.session import make_play_env
-
     env = make_play_env(env_kwargs)
     game = blocker.new_game()
     zs, modes = [], []

@@ -12,25 +12,14 @@ import time
 from collections.abc import Iterator
 from typing import Any
 
-import gymnasium as gym
 import mujoco
 
-from lili.play.policy import Blocker, interaction_steps
+from lili.play.policy import Blocker, interaction_steps, make_play_env
 from lili.play.probe import ModeProbe
 from lili.play.record import SessionRecord
 from lili.play.striker import MODE_NAMES, AimedStriker
 
 __all__ = ["GameSession", "make_play_env"]
-
-
-def make_play_env(env_kwargs: dict[str, Any]) -> gym.Env:
-    """The air hockey env of training with ``env_kwargs`` (ValueError when they do not fit)."""
-    import lili.envs  # noqa: F401 - registers the ids
-
-    try:
-        return gym.make("lili/AirHockey-v0", **env_kwargs)
-    except TypeError as e:
-        raise ValueError(f"air hockey does not accept the env kwargs {env_kwargs}: {e}") from None
 
 
 class GameSession:
