@@ -9,7 +9,7 @@ import pytest
 import lili.envs  # noqa: F401  (registers the envs)
 from lili.agents import LILI, SAC, CheckpointError, Oracle, load_agent, make_agent
 from lili.config import AgentConfig, load_config
-from lili.nets import tanh_gaussian
+from lili.dists import tanh_gaussian
 
 SMALL = AgentConfig(hidden=(32, 32), enc_hidden=(16, 16), latent_dim=3)
 GAMMA = SMALL.gamma
@@ -31,13 +31,13 @@ def _batch(agent, rng):
 
 def _manual_target(agent, state, batch, key, boundary_latent):
     """y computed from first principles for each transition (see DESIGN 'LILI semantics')."""
-    norm = state["norm"]
+    core, norm = agent.core, state.norm
     h = agent.horizon
-    enc_t = state["target"]["encoder"]
+    enc_t = state.target["encoder"]
     prev = {k: v[:, 0:1] for k, v in batch["window"].items()}
     cur = {k: v[:, 1:2] for k, v in batch["window"].items()}
-    z_k = agent.encoder.apply(enc_t, agent._features(norm, prev), prev["weight"])
-    z_k1 = agent.encoder.apply(enc_t, agent._features(norm, cur), cur["weight"])
+    z_k = core.encoder.apply(enc_t, core._features(norm, prev), prev["weight"])
+    z_k1 = core.encoder.apply(enc_t, core._features(norm, cur), cur["weight"])
     rows = []
     for i in range(2):
         row = []
@@ -48,14 +48,14 @@ def _manual_target(agent, state, batch, key, boundary_latent):
             else:
                 s, phase = batch["next_obs"][i, j], (batch["t"][i, j] + 1) / h
                 z = z_k[i]
-            s = (s - norm["obs_mean"]) / norm["obs_std"]
+            s = (s - norm.obs_mean) / norm.obs_std
             row.append(jnp.concatenate([s, jnp.array([phase]), z]))
         rows.append(jnp.stack(row))
     x = jnp.stack(rows)
-    mean, log_std = agent.actor.apply(state["actor"], x)
+    mean, log_std = core.actor.apply(state.actor, x)
     a, logp = tanh_gaussian(mean, log_std, key)
-    v = agent.critic.apply(state["target"]["critic"], x, a).min(0) - jnp.exp(
-        state["log_alpha"]) * logp
+    v = core.critic.apply(state.target["critic"], x, a).min(0) - jnp.exp(
+        state.log_alpha) * logp
     y = batch["rew"] + GAMMA * v
     if boundary_latent == "cut":
         y = jnp.where(batch["last"], batch["rew"], y)
@@ -67,13 +67,12 @@ def test_critic_target_at_the_boundary(influence):
     env = gym.make("lili/PointMass-v0")
     agent = LILI(env, SMALL, seed=1, influence=influence)
     assert agent.boundary == ("influence" if influence else "cut")
-    state = dict(agent.state)
     # Make the target encoder differ from the online one: the target must use the target copy.
-    state["target"] = dict(state["target"], encoder=jax.tree_util.tree_map(
-        lambda p: p * 1.5 + 0.1, state["target"]["encoder"]))
+    state = agent.state.replace(target=dict(agent.state.target, encoder=jax.tree_util.tree_map(
+        lambda p: p * 1.5 + 0.1, agent.state.target["encoder"])))
     batch = _batch(agent, np.random.default_rng(0))
     key = jax.random.PRNGKey(7)
-    y = np.asarray(agent.critic_target(state, batch, key))
+    y = np.asarray(agent.core.critic_target(state, batch, key))
     want = _manual_target(agent, state, batch, key, "influence" if influence else "cut")
     np.testing.assert_allclose(y, np.asarray(want), rtol=1e-5, atol=1e-5)
     if not influence:
@@ -91,7 +90,7 @@ def test_same_z_reading_is_available_as_an_option():
     agent = LILI(env, SMALL.replace(boundary="same_z"), seed=1, influence=False)
     batch = _batch(agent, np.random.default_rng(0))
     key = jax.random.PRNGKey(2)
-    y = agent.critic_target(agent.state, batch, key)
+    y = agent.core.critic_target(agent.state, batch, key)
     want = _manual_target(agent, agent.state, batch, key, "same_z")
     np.testing.assert_allclose(np.asarray(y), np.asarray(want), rtol=1e-5, atol=1e-5)
 
@@ -102,15 +101,15 @@ def test_sac_bootstraps_from_the_next_interaction():
     batch = _batch(agent, np.random.default_rng(1))
     batch.pop("window")
     key = jax.random.PRNGKey(3)
-    y = np.asarray(agent.critic_target(agent.state, batch, key))
-    st = agent.state
+    y = np.asarray(agent.core.critic_target(agent.state, batch, key))
+    st, core = agent.state, agent.core
     x = jnp.concatenate([batch["next_first_obs"], jnp.zeros((2, 1))], -1)  # phase 0
     x = jnp.broadcast_to(x[:, None], (2, 3, 3))
     x_in = jnp.concatenate([batch["next_obs"], ((batch["t"] + 1) / agent.horizon)[..., None]], -1)
     x = jnp.where(batch["last"][..., None], x, x_in)
-    mean, log_std = agent.actor.apply(st["actor"], x)
+    mean, log_std = core.actor.apply(st.actor, x)
     a, logp = tanh_gaussian(mean, log_std, key)
-    v = agent.critic.apply(st["target"]["critic"], x, a).min(0) - jnp.exp(st["log_alpha"]) * logp
+    v = core.critic.apply(st.target["critic"], x, a).min(0) - jnp.exp(st.log_alpha) * logp
     np.testing.assert_allclose(y, np.asarray(batch["rew"] + GAMMA * v), rtol=1e-5, atol=1e-5)
 
 
@@ -144,7 +143,7 @@ def test_save_load_round_trip(tmp_path):
                     strict=True):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
     obs = np.array([0.01, -0.02], np.float32)
-    st = agent.current_latent_state()
+    st = agent.next_state(agent.stream.buffer)  # the latent of the next interaction
     np.testing.assert_array_equal(agent.predict(obs, st)[0], loaded.predict(obs, st)[0])
     assert isinstance(load_agent(path, gym.make("lili/PointMass-v0")), LILI)
 

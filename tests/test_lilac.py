@@ -9,7 +9,7 @@ import pytest
 
 import lili.envs  # noqa: F401  (registers the envs)
 from lili.agents import ALGOS, LILAC, load_agent, make_agent
-from lili.buffer import sample
+from lili.buffer import InteractionBuffer, sample
 from lili.config import AgentConfig
 
 N = 2
@@ -26,10 +26,12 @@ def agent():
     return a
 
 
-def _batch(agent, seed=0):
-    a = agent.buffer.arrays
+def _batch(agent, seed=0, buf=None):
+    """A training batch from ``buf`` (default: the buffer the agent learnt on)."""
+    buf = agent.stream.buffer if buf is None else buf
+    a = buf.arrays
     cfg = agent.config
-    return sample({k: jnp.asarray(v) for k, v in a.items()}, jnp.asarray(agent.buffer.count),
+    return sample({k: jnp.asarray(v) for k, v in a.items()}, jnp.asarray(buf.count),
                   jax.random.PRNGKey(seed), cfg.batch_interactions, cfg.per_interaction,
                   agent.history, cfg.encoder_transitions)
 
@@ -51,13 +53,13 @@ def test_registered_and_defaults():
 def test_posterior_and_prior_shapes(agent):
     batch = _batch(agent)
     b, w = SMALL.batch_interactions, N + 1
-    model, norm = agent.state["model"], agent.state["norm"]
-    q_mean, q_log_std = agent.posterior_params(model["encoder"], norm, batch["window"])
+    core, model, norm = agent.core, agent.state.model, agent.state.norm
+    q_mean, q_log_std = core.posterior_params(model["encoder"], norm, batch["window"])
     assert q_mean.shape == q_log_std.shape == (b, w, L)
     present = jnp.ones((b, w), bool)
-    p_mean, p_log_std = agent.prior_params(model["encoder"], q_mean, present)
+    p_mean, p_log_std = core.prior_params(model["encoder"], q_mean, present)
     assert p_mean.shape == p_log_std.shape == (b, w + 1, L)
-    z, zbar, zbar_next = agent._latents(model, agent.state["target"], norm, batch)
+    z, zbar, zbar_next = core._latents(model, agent.state.target, norm, batch)
     assert z.shape == zbar.shape == zbar_next.shape == (b, L)
     # The critic's latent for interaction k is the prior's prediction from k-N..k-1.
     np.testing.assert_allclose(np.asarray(z), np.asarray(p_mean[:, N]), rtol=1e-5, atol=1e-6)
@@ -66,16 +68,16 @@ def test_posterior_and_prior_shapes(agent):
 def test_elbo_terms_are_finite_and_decrease_on_a_fixed_batch(agent):
     batch = _batch(agent, seed=1)
     key = jax.random.PRNGKey(0)
-    norm = agent.state["norm"]
+    core, norm = agent.core, agent.state.norm
 
     def terms(state):
         return {k: float(v) for k, v in
-                agent.elbo_terms(state["model"], norm, batch, key).items()}
+                core.elbo_terms(state.model, norm, batch, key).items()}
 
     @jax.jit
     def steps(state):
         def body(s, i):
-            s, m = agent._update(s, batch, jax.random.fold_in(key, i))
+            s, m = core.update(s, batch, jax.random.fold_in(key, i))
             return s, m
         return jax.lax.scan(body, state, jnp.arange(300))
 
@@ -93,11 +95,11 @@ def test_elbo_terms_are_finite_and_decrease_on_a_fixed_batch(agent):
 
 def test_prior_learns_only_from_the_kl(agent):
     batch = _batch(agent, seed=2)
-    model, norm = agent.state["model"], agent.state["norm"]
+    core, model, norm = agent.core, agent.state.model, agent.state.norm
     key = jax.random.PRNGKey(5)
 
     def grad_of(term):
-        return jax.jit(jax.grad(lambda m: agent.elbo_terms(m, norm, batch, key)[term]))(model)
+        return jax.jit(jax.grad(lambda m: core.elbo_terms(m, norm, batch, key)[term]))(model)
 
     g_kl, g_recon, g_ctx = grad_of("kl"), grad_of("recon"), grad_of("kl_context")
     assert _leaves_norm(g_kl["encoder"]["prior"]) > 0
@@ -110,46 +112,47 @@ def test_prior_learns_only_from_the_kl(agent):
     # The critic's latent is the prior's prediction, detached: the RL losses shape neither the
     # prior nor the posterior (no path to learn the ego's influence).
     g_critic = jax.jit(jax.grad(
-        lambda m: agent._latents(m, agent.state["target"], norm, batch)[0].sum()))(model)
+        lambda m: core._latents(m, agent.state.target, norm, batch)[0].sum()))(model)
     assert _leaves_norm(g_critic["encoder"]) == 0
 
 
 def test_posterior_critic_option_sends_the_critic_gradient_to_the_posterior():
     cfg = SMALL.replace(extra={"lilac": {"prior_window": N, "critic_latent": "posterior"}})
     a = LILAC(gym.make("lili/PointMass-v0"), cfg, seed=0)
+    buf = InteractionBuffer(cfg.buffer_capacity, a.horizon, a.obs_dim, a.act_dim)
     rng = np.random.default_rng(0)
     for _ in range(N + 2):
         n = 50
-        a.buffer.add({"obs": rng.normal(size=(n, 2)), "act": rng.uniform(-1, 1, (n, 2)),
+        buf.add({"obs": rng.normal(size=(n, 2)), "act": rng.uniform(-1, 1, (n, 2)),
                       "rew": rng.normal(size=n), "next_obs": rng.normal(size=(n, 2))},
                      rng.normal(size=2))
-    batch = _batch(a)
-    model, norm = a.state["model"], a.state["norm"]
-    z, _, _ = a._latents(model, a.state["target"], norm, batch)
-    q_mean, _ = a.posterior_params(model["encoder"], norm, batch["window"])
+    batch = _batch(a, buf=buf)
+    core, model, norm = a.core, a.state.model, a.state.norm
+    z, _, _ = core._latents(model, a.state.target, norm, batch)
+    q_mean, _ = core.posterior_params(model["encoder"], norm, batch["window"])
     np.testing.assert_allclose(np.asarray(z), np.asarray(q_mean[:, N]), rtol=1e-6)
-    g = jax.grad(lambda m: a._latents(m, a.state["target"], norm, batch)[0].sum())(model)
+    g = jax.grad(lambda m: core._latents(m, a.state.target, norm, batch)[0].sum())(model)
     assert _leaves_norm(g["encoder"]["posterior"]) > 0
     assert _leaves_norm(g["encoder"]["prior"]) == 0
 
 
 def test_acts_with_the_prior_prediction_from_previous_posteriors(agent):
-    buf = agent.buffer
-    model, norm = agent.state["model"], agent.state["norm"]
+    buf, core = agent.stream.buffer, agent.core
+    model, norm = agent.state.model, agent.state.norm
     enc = model["encoder"]
     steps = agent.config.encoder_transitions
 
     def manual(end):
         """Prior mean for interaction end+1 from the posterior means of end-N+1..end."""
         win = buf.window(end, N, steps)
-        x = agent._features(norm, {k: jnp.asarray(v) for k, v in win.items()})
-        out = agent.posterior.apply(enc["posterior"], x[:, None], jnp.asarray(win["weight"])[:,
-                                    None])
+        x = core._features(norm, {k: jnp.asarray(v) for k, v in win.items()})
+        out = core.posterior.apply(enc["posterior"], x[:, None], jnp.asarray(win["weight"])[:,
+                                   None])
         q_mean = out[:, :L]
-        p_mean, _ = agent.prior.apply(enc["prior"], q_mean[None], jnp.ones((1, N), bool))
+        p_mean, _ = core.prior.apply(enc["prior"], q_mean[None], jnp.ones((1, N), bool))
         return np.asarray(p_mean[0, -1]), np.asarray(q_mean)
 
-    z_next = agent.current_latent_state().z
+    z_next = agent.next_state(buf).z
     want, _ = manual(buf.count - 1)
     np.testing.assert_allclose(z_next, want, rtol=1e-5, atol=1e-6)
 
@@ -165,14 +168,12 @@ def test_acts_with_the_prior_prediction_from_previous_posteriors(agent):
     k = buf.count - 1
     win = {key: jnp.asarray(v)[None] for key, v in buf.window(k, N + 1, steps).items()}
     batch = {"window": win}
-    _, _, zbar_next = agent._latents(model, {"encoder": enc}, norm, batch)
+    _, _, zbar_next = core._latents(model, {"encoder": enc}, norm, batch)
     np.testing.assert_allclose(np.asarray(zbar_next[0]), z_next, rtol=1e-5, atol=1e-6)
 
 
 def _prefix(buf, count):
     """A copy of ``buf`` holding only its first ``count`` interactions."""
-    from lili.buffer import InteractionBuffer
-
     out = InteractionBuffer(buf.capacity, buf.horizon, buf.obs_dim, buf.act_dim)
     for k, v in buf.arrays.items():
         out.arrays[k] = v.copy()
@@ -182,8 +183,8 @@ def _prefix(buf, count):
 
 def test_first_interaction_uses_the_unconditional_prior(agent):
     z0 = agent.initial_state().z
-    p_mean, _ = agent.prior.apply(agent.state["model"]["encoder"]["prior"], jnp.zeros((1, 0, L)),
-                                  jnp.zeros((1, 0), bool))
+    p_mean, _ = agent.core.prior.apply(agent.state.model["encoder"]["prior"],
+                                       jnp.zeros((1, 0, L)), jnp.zeros((1, 0), bool))
     np.testing.assert_allclose(z0, np.asarray(p_mean[0, 0]), rtol=1e-6, atol=1e-7)
 
 
@@ -195,8 +196,8 @@ def test_save_load_round_trip(agent, tmp_path):
     for a, b in zip(jax.tree_util.tree_leaves(agent.state),
                     jax.tree_util.tree_leaves(loaded.state), strict=True):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
-    st = agent.next_latent_state(agent.buffer)
-    np.testing.assert_array_equal(loaded.next_latent_state(agent.buffer).z, st.z)
+    st = agent.next_latent_state(agent.stream.buffer)
+    np.testing.assert_array_equal(loaded.next_latent_state(agent.stream.buffer).z, st.z)
     np.testing.assert_array_equal(loaded.initial_state().z, agent.initial_state().z)
     for obs in (np.array([0.01, -0.02], np.float32), np.array([0.1, 0.05], np.float32)):
         np.testing.assert_array_equal(agent.predict(obs, st)[0], loaded.predict(obs, st)[0])

@@ -8,15 +8,15 @@ import numpy as np
 
 import lili.envs  # noqa: F401
 from lili.agents import make_agent
-from lili.train import train
+from lili.train import Stream, train
 
 
 def test_random_policy_is_uniform_reproducible_and_never_learns() -> None:
     agent = make_agent("random", gym.make("lili/Driving2D-v0"), {"warmup_interactions": 2}, 0)
-    before = jax.tree_util.tree_map(np.asarray, agent.state["actor"])
-    rows = train(agent, 6)
+    before = jax.tree_util.tree_map(np.asarray, agent.state.actor)
+    rows = train(agent, Stream.for_agent(agent, agent.env), 6)
     assert all("critic_loss" not in r for r in rows)  # no update ever ran
-    after = jax.tree_util.tree_map(np.asarray, agent.state["actor"])
+    after = jax.tree_util.tree_map(np.asarray, agent.state.actor)
     assert all(np.array_equal(a, b) for a, b in zip(jax.tree_util.tree_leaves(before),
                                                       jax.tree_util.tree_leaves(after),
                                                       strict=True))
@@ -28,4 +28,5 @@ def test_random_policy_is_uniform_reproducible_and_never_learns() -> None:
     assert abs(acts.mean()) < 0.1 and abs(acts.std() - 0.577) < 0.05
     assert np.array_equal(agent.predict(obs, key=keys[0])[0], agent.predict(obs, key=keys[0])[0])
     again = make_agent("random", gym.make("lili/Driving2D-v0"), {"warmup_interactions": 2}, 0)
-    assert [r["return"] for r in train(again, 6)] == [r["return"] for r in rows]
+    rows_again = train(again, Stream.for_agent(again, again.env), 6)
+    assert [r["return"] for r in rows_again] == [r["return"] for r in rows]

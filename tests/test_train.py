@@ -14,7 +14,7 @@ from lili.agents import LILI, SAC
 from lili.config import AgentConfig
 from lili.evaluate import evaluate
 from lili.runs import RunLogger
-from lili.train import train
+from lili.train import Stream, train
 
 FAST = {"hidden": [32, 32], "enc_hidden": [16, 16], "latent_dim": 3, "warmup_interactions": 3,
         "checkpoint_every": 4, "batch_interactions": 8, "per_interaction": 4}
@@ -30,6 +30,11 @@ def cfg_file(tmp_path):
     p = tmp_path / "fast.yaml"
     p.write_text(yaml.safe_dump(FAST))
     return str(p)
+
+
+def _loop(agent, n):
+    """The loop's rows for ``n`` interactions of ``agent`` on a fresh stream of its env."""
+    return train(agent, Stream.for_agent(agent, agent.env), n)
 
 
 def _train(out, cfg_file, algo="lili", n=10, extra=()):
@@ -63,8 +68,8 @@ def test_resume_gives_the_same_numbers(tmp_path, cfg_file, monkeypatch, algo):
     assert _train(tmp_path / "full", cfg_file, algo, n=10) == 0
     original_log = RunLogger.log
 
-    def dying_log(self, row, agent):
-        original_log(self, row, agent)
+    def dying_log(self, row, agent, stream):
+        original_log(self, row, agent, stream)
         if row["interaction"] == 6:  # killed two interactions after the checkpoint at 4
             raise KeyboardInterrupt
 
@@ -81,7 +86,7 @@ def test_resume_gives_the_same_numbers(tmp_path, cfg_file, monkeypatch, algo):
 def test_same_seed_same_numbers_other_seed_other_numbers():
     def returns(seed):
         agent = SAC(gym.make("lili/PointMass-v0"), AgentConfig.from_dict(FAST), seed=seed)
-        return [(r["return"], r.get("critic_loss")) for r in train(agent, 6)]
+        return [(r["return"], r.get("critic_loss")) for r in _loop(agent, 6)]
 
     a, b, c = returns(0), returns(0), returns(1)
     assert a == b and a != c
@@ -104,7 +109,7 @@ def test_lili_learns_driving_2d():
     """
     env = gym.make("lili/Driving2D-v0")
     agent = LILI(env, AgentConfig(updates_per_step=2.0), seed=0)
-    rows = train(agent, 400)
+    rows = _loop(agent, 400)
     success = np.mean([r["success"] for r in rows[-50:]])
     assert success >= 0.6, success
 
@@ -129,4 +134,4 @@ def test_training_on_an_env_that_breaks_the_contract_fails_clearly():
 
     agent = SAC(_Endless(), AgentConfig.from_dict(FAST))
     with pytest.raises(EnvContractError, match="did not end within the env's horizon \\(3"):
-        train(agent, 1)
+        _loop(agent, 1)
