@@ -12,7 +12,14 @@ from gymnasium import spaces
 
 import lili.envs  # noqa: F401 - registers the envs
 from lili.envs import OracleObservation, RepeatedInteractionEnv
-from lili.envs.checker import EnvContractError, check_env, load_env_class
+from lili.envs.checker import (
+    DEFAULT_INTERACTIONS,
+    EnvContractError,
+    check_env,
+    check_env_kwargs,
+    env_kwarg_names,
+    load_env_class,
+)
 from lili.envs.point_mass import PointMassEnv
 
 
@@ -72,6 +79,58 @@ class LeakyEnv(ToyEnv):
 
     def _obs(self) -> np.ndarray:
         return np.array([self.x, self.partner.z], dtype=np.float32)
+
+
+class ScaledLeakEnv(LeakyEnv):
+    """Puts a scaled and shifted copy of the strategy into the observation."""
+
+    def _obs(self) -> np.ndarray:
+        return np.array([self.x, 1.5 * self.partner.z - 0.5], dtype=np.float32)
+
+
+class BinPartner(FlipPartner):
+    """A continuous strategy in [-1, 1]; its id is the third of the interval it falls in."""
+
+    def update(self, outcome: Any, rng: np.random.Generator) -> None:
+        self.z = float(rng.uniform(-1.0, 1.0))
+
+    def strategy_id(self) -> int | None:
+        return min(2, int((self.z + 1.0) * 1.5))
+
+
+class LabelLeakEnv(LeakyEnv):
+    """Shows whether the strategy id is the middle one: not affine in z, affine in the one-hot."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.partner = BinPartner()
+
+    def _obs(self) -> np.ndarray:
+        return np.array([self.x, float(self.partner.strategy_id() == 1)], dtype=np.float32)
+
+
+class LateNaNEnv(ToyEnv):
+    """Breaks only from interaction ``at`` on: the observation turns NaN or the reward inf."""
+
+    def __init__(self, at: int = 60, what: str = "obs") -> None:
+        super().__init__()
+        self.at, self.what = at, what
+        self.observation_space = spaces.Box(-np.inf, np.inf, shape=(1,), dtype=np.float32)
+
+    def _step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool]:
+        obs, reward, done = super()._step(action)
+        if self.interaction >= self.at:
+            if self.what == "obs":
+                obs = np.full_like(obs, np.nan)
+            else:
+                reward = float("inf")
+        return obs, reward, done
+
+
+class HugeHorizonEnv(ToyEnv):
+    def __init__(self) -> None:
+        super().__init__()
+        self.horizon = 10**9
 
 
 class DriftingEnv(ToyEnv):
@@ -167,6 +226,8 @@ class Float64StrategyEnv(ToyEnv):
     [
         "lili/PointMass-v0",
         "driving-2d",
+        "driving-steer",
+        "air-hockey",
         PointMassEnv,
         functools.partial(PointMassEnv, step_noise=0.2, history=3),
         ToyEnv,
@@ -190,7 +251,13 @@ def test_check_env_accepts_an_instance_and_leaves_it_usable() -> None:
 @pytest.mark.parametrize(
     ("env_or_factory", "fragments"),
     [
-        (LeakyEnv, ["observation dimension 1 equals strategy dimension 0", "leaks"]),
+        (LeakyEnv, ["observation dimension 1 is an affine function", "obs[1] = 1 * strategy[0]",
+                    "leaks"]),
+        (ScaledLeakEnv, ["observation dimension 1", "-0.5 + 1.5 * strategy[0]", "leaks"]),
+        (LabelLeakEnv, ["observation dimension 1", "a one-hot of strategy_id", "leaks"]),
+        (functools.partial(LateNaNEnv, at=60), ["interaction 60", "not finite"]),
+        (functools.partial(LateNaNEnv, at=60, what="reward"), ["interaction 60", "reward is inf"]),
+        (HugeHorizonEnv, ["horizon=1000000000 is too long to train on", "GiB"]),
         (DriftingEnv, ["step 3", "strategy changed within the interaction"]),
         (GlobalRandomEnv, ["reset(seed=0) did not replay", "strategy", "np.random"]),
         (GlobalRandomStartEnv, ["gymnasium's env checker failed", "not equivalent", "np.random"]),
@@ -214,9 +281,36 @@ def test_check_env_names_the_broken_rule(env_or_factory: Any, fragments: list[st
     assert "The contract requires" in message or "gymnasium.Env" in message
 
 
-def test_check_env_rejects_bad_n_interactions() -> None:
-    with pytest.raises(ValueError, match="n_interactions=1"):
-        check_env(ToyEnv, n_interactions=1)
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"n_interactions": 1}, r"n_interactions=1 is invalid; allowed: an integer in \[2, 10000\]"),
+    ({"n_interactions": 10**9}, "n_interactions=1000000000"),
+    ({"n_interactions": 6.0}, "n_interactions=6.0"),
+    ({"seed": -1}, r"seed=-1 is invalid; allowed: an integer in \[0, 4294967295\]"),
+    ({"seed": 2**70}, "seed=1180591620717411303424"),
+])
+def test_check_env_rejects_bad_arguments(kwargs: dict[str, Any], match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        check_env(ToyEnv, **kwargs)
+
+
+def test_the_default_run_is_long_enough_for_late_faults() -> None:
+    assert DEFAULT_INTERACTIONS >= 60
+    check_env(functools.partial(LateNaNEnv, at=DEFAULT_INTERACTIONS))  # never reached: passes
+
+
+def test_env_kwarg_names_and_check() -> None:
+    assert env_kwarg_names(load_env_class("point-mass"))[:3] == ["step_noise", "history",
+                                                                  "horizon"]
+    assert env_kwarg_names(load_env_class("driving-2d")) == ["history", "render_mode"]
+    assert env_kwarg_names(ToyEnv) == []
+    assert env_kwarg_names(lambda **kw: ToyEnv()) is None  # **kwargs: only the env can tell
+    check_env_kwargs(load_env_class("driving-2d"), {"history": 3}, "driving-2d")
+    with pytest.raises(ValueError) as excinfo:
+        check_env_kwargs(load_env_class("driving-2d"), {"colour": 1, "lanes": 4}, "driving-2d")
+    assert str(excinfo.value) == ("unknown env kwarg(s) 'colour', 'lanes' for driving-2d; "
+                                  "allowed: history")
+    with pytest.raises(ValueError, match="allowed: none"):
+        check_env_kwargs(ToyEnv, {"x": 1}, "ToyEnv")
 
 
 def test_never_varying_strategy_warns_that_leaks_were_not_checked() -> None:

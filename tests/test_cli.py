@@ -4,6 +4,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from lili import cli
@@ -18,11 +19,11 @@ def _err(capsys, argv):
     (["train", "pong"], "unknown env 'pong'; allowed: air-hockey, driving-2d"),
     (["train", "point-mass", "--algo", "ppo"], "unknown algo 'ppo'; allowed: sac, oracle"),
     (["train", "point-mass", "--interactions", "-5"], "--interactions -5 is invalid"),
-    (["train", "point-mass", "--seed", "-1"], "--seed -1 is invalid"),
+    (["train", "point-mass", "--seed", "-1"], "--seed=-1 is invalid"),
     (["train", "point-mass", "--config", "/nonexistent.yaml"], "does not exist"),
     (["train", "point-mass", "--env-kwarg", "step_noise"], "KEY=VALUE"),
     (["train", "point-mass", "--env-kwarg", "step_noise=-1"], "step_noise=-1"),
-    (["train", "point-mass", "--env-kwarg", "colour=red"], "does not accept"),
+    (["train", "point-mass", "--env-kwarg", "colour=red"], "unknown env kwarg(s) 'colour'"),
     (["check-env", "nosuchmodule:Env"], "nosuchmodule"),
     (["eval", "/nonexistent"], "not a run folder"),
     (["report", "/nonexistent"], "/nonexistent"),
@@ -106,3 +107,52 @@ def test_console_script_exit_code():
     res = subprocess.run([str(exe), "train", "point-mass", "--algo", "dqn"], capture_output=True,
                          text=True)
     assert res.returncode == 2 and "unknown algo 'dqn'" in res.stderr
+
+
+def test_eval_video_frames_carry_interaction_strategy_and_return(tmp_path):
+    from PIL import Image
+
+    assert cli.main(["train", "point-mass", "--algo", "random", "--interactions", "2", "--out",
+                     str(tmp_path), "--no-progress"]) == 0
+    run = tmp_path / "PointMass-v0" / "random" / "seed_0"
+    gif = tmp_path / "clip.gif"
+    assert cli.main(["eval", str(run), "--interactions", "2", "--video", str(gif)]) == 0
+    with Image.open(gif) as img:
+        frames = []
+        for n in range(img.n_frames):
+            img.seek(n)
+            frames.append(np.asarray(img.convert("RGB")))
+    assert len(frames) == 2 * 50 and frames[0].shape == (200 + 40, 200, 3)
+    strips = [f[:40] for f in frames]
+    assert strips[0].max() > 200  # white text on the black strip (the GIF palette rounds)
+    # The return line changes from step to step, the interaction line between interactions.
+    assert not np.array_equal(strips[1], strips[2])
+    assert not np.array_equal(strips[0][:14], strips[50][:14])
+    assert np.array_equal(strips[1][:14], strips[2][:14])
+
+
+def test_labelled_frames_follow_the_env():
+    import gymnasium as gym
+
+    from lili.video import LabelledFrames, frame_label
+
+    env = LabelledFrames(gym.make("lili/Driving2D-v0", render_mode="rgb_array"))
+    _, info = env.reset(seed=3)
+    total = 0.0
+    for _ in range(10):
+        _, r, term, trunc, info = env.step(np.array([1.0], np.float32))
+        total += r
+    assert env.label() == frame_label(0, info["strategy"], info["strategy_id"], total)
+    assert env.render().shape == (250 + 40, 150, 3)
+    env.reset()
+    assert env.label()[0] == "interaction 1" and env.label()[2] == "return 0.00"
+    assert frame_label(4, [0.05, -0.1], -1, -1.234) == ["interaction 4", "strategy [0.05 -0.1]",
+                                                         "return -1.23"]
+    assert frame_label(0, [1.0], 1, 0.0)[1] == "strategy [1] id 1"
+
+
+def test_argparse_errors_are_one_line_and_help_exits_0(capsys):
+    assert cli.main(["train", "point-mass", "--interactions", "1.5"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--interactions: invalid int value: '1.5'" in err
+    assert cli.main(["eval", "--help"]) == 0

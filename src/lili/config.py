@@ -189,7 +189,7 @@ def _number(config: AgentConfig, name: str, ok: Callable[[float], bool], allowed
     if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(v) \
             or not ok(v):
         raise _bad(config, name, allowed)
-    return v if isinstance(v, (int, float)) else float(v)
+    return v if type(v) in (int, float) else float(v)  # np.float64 is a float subclass
 
 
 def _integer(config: AgentConfig, name: str, low: int, also: str = "") -> int:

@@ -55,7 +55,7 @@ def frame_label(interaction: int, strategy: Any, strategy_id: int | None,
                 ret: float) -> list[str]:
     """The label lines of one frame: interaction index, strategy (and id), return so far."""
     z = np.asarray(strategy, dtype=np.float64).ravel()
-    line = "z [" + " ".join(f"{v:.2g}" for v in z) + "]"
+    line = "strategy [" + " ".join(f"{v:.2g}" for v in z) + "]"
     if strategy_id is not None and strategy_id != -1:
         line += f" id {int(strategy_id)}"
     return [f"interaction {int(interaction)}", line, f"return {ret:.2f}"]

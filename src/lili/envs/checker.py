@@ -202,8 +202,8 @@ def load_env_class(spec: str) -> EnvFactory:
         return functools.partial(gym.make, env_id)
     known = sorted(ENV_ALIASES) + sorted(ENV_ALIASES.values())
     raise ValueError(
-        f"unknown env {spec!r}: not 'package.module:ClassName' and not a registered gymnasium "
-        f"id; the library's envs: {', '.join(known)}"
+        f"unknown env {spec!r}; allowed: {', '.join(known)}, another registered gymnasium id "
+        f"or 'package.module:ClassName' for an env of your own"
     )
 
 
@@ -503,34 +503,40 @@ def _check_no_leak(run: list[_Interaction], name: str) -> None:
         return
     ids = np.array([sid for r in run for sid in r.strategy_ids])
     values = np.unique(ids)
-    regressors = [np.ones(len(obs)), *(strat[:, k] for k in varied)]
+    # The strategy alone first, so that a plain copy is reported as one; then with the one-hot
+    # of strategy_id, which catches an observation that encodes the label instead.
+    designs = [np.stack([np.ones(len(obs)), *(strat[:, k] for k in varied)], axis=1)]
     if 1 < len(values) <= 16:
-        regressors += [(ids == v).astype(np.float64) for v in values]
-    design = np.stack(regressors, axis=1)
+        onehot = [(ids == v).astype(np.float64) for v in values]
+        designs.append(np.concatenate([designs[0], np.stack(onehot, axis=1)], axis=1))
     for j in range(obs.shape[1]):
         y = obs[:, j]
         spread = float(np.sum((y - y.mean()) ** 2))
         if spread <= 1e-12 * max(1.0, float(np.sum(y**2))):
             continue  # a constant feature cannot carry a strategy that changed
-        coef, *_ = np.linalg.lstsq(design, y, rcond=None)
-        unexplained = float(np.sum((y - design @ coef) ** 2)) / spread
-        if unexplained < LEAK_TOLERANCE:
-            # Name only the terms that matter (the others are rounding noise, ~1e-16).
-            scale = 1e-9 * float(np.max(np.abs(coef)))
-            terms = [f"{coef[0]:.3g}"] if abs(coef[0]) > scale else []
-            terms += [f"{coef[1 + n]:.3g} * strategy[{k}]" for n, k in enumerate(varied)
-                      if abs(coef[1 + n]) > scale]
-            if np.any(np.abs(coef[1 + len(varied):]) > scale):
-                terms.append("a one-hot of strategy_id")
-            raise _fail(name, f"observation dimension {j} is an affine function of the strategy "
-                        f"on every step of {len(run)} interactions (about obs[{j}] = "
-                        f"{' + '.join(terms)}; {unexplained:.1e} of its variance "
-                        f"unexplained) while the strategy "
-                        f"changed (the strategy leaks into the observation)",
-                        "observations that never contain the strategy; report it only in "
-                        "info['strategy'] (the Oracle baseline appends it with "
-                        "OracleObservation)")
+        for design in designs:
+            coef, *_ = np.linalg.lstsq(design, y, rcond=None)
+            unexplained = float(np.sum((y - design @ coef) ** 2)) / spread
+            if unexplained < LEAK_TOLERANCE:
+                raise _fail(
+                    name, f"observation dimension {j} is an affine function of the strategy on "
+                    f"every step of {len(run)} interactions (about obs[{j}] = "
+                    f"{_affine_terms(coef, varied)}; {unexplained:.1e} of its variance "
+                    f"unexplained) while the strategy changed (the strategy leaks into the "
+                    f"observation)", "observations that never contain the strategy; report it "
+                    "only in info['strategy'] (the Oracle baseline appends it with "
+                    "OracleObservation)")
 
+
+def _affine_terms(coef: np.ndarray, varied: list[int]) -> str:
+    """The fit's terms that matter (the others are rounding noise, ~1e-16 of the largest)."""
+    scale = 1e-9 * float(np.max(np.abs(coef)))
+    terms = [f"{coef[0]:.3g}"] if abs(coef[0]) > scale else []
+    terms += [f"{coef[1 + n]:.3g} * strategy[{k}]" for n, k in enumerate(varied)
+              if abs(coef[1 + n]) > scale]
+    if np.any(np.abs(coef[1 + len(varied):]) > scale):
+        terms.append("a one-hot of strategy_id")
+    return " + ".join(terms) or "0"
 
 LEAK_TOLERANCE = 1e-6
 """Largest fraction of an observation feature's variance a strategy fit may leave unexplained
