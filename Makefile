@@ -1,8 +1,8 @@
-# Quick start: `make run` trains LILI on Point Mass with a small default; `make test` runs the suite.
+# Quick start: `make run` trains LILI and SAC on Driving (2D) and reports them beside the paper;
+# `make test` runs the suite.
 PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
-INTERACTIONS ?= 300
 
 .PHONY: venv dev run test lint bench clean
 
@@ -20,13 +20,10 @@ $(VENV)/.dev: $(BIN)/lili
 
 dev: $(VENV)/.dev
 
-QUICK := runs/quickstart
-# A second `make run` continues (or just re-reports) the same run instead of refusing to overwrite it.
-RESUME = $(if $(wildcard $(QUICK)/PointMass-v0/lili/seed_0/metrics.csv),--resume,)
-
+# LILI against SAC on Driving (2D), two runs side by side (lili.experiments.presets: quickstart).
+# A second `make run` skips the finished runs and only writes the report again.
 run: venv
-	$(BIN)/lili train point-mass --algo lili --seed 0 --interactions $(INTERACTIONS) --out $(QUICK) $(RESUME)
-	$(BIN)/lili report $(QUICK) --out $(QUICK)/report
+	$(BIN)/lili reproduce quickstart --out runs
 
 test: dev
 	$(BIN)/ruff check src tests benchmarks

@@ -27,7 +27,7 @@ import numpy as np
 import lili.envs  # noqa: F401
 from lili.agents import make_agent
 from lili.config import AgentConfig
-from lili.train import train
+from lili.train import Stream, train
 
 RESULTS = Path(__file__).resolve().parent / "results"
 AGENTS = ("sac", "oracle", "lili", "lili-no-influence", "lilac", "slac")
@@ -38,12 +38,12 @@ def ours(algo: str, n_updates: int):
     env = gym.make("lili/PointMass-v0")
     cfg = AgentConfig(warmup_interactions=40, updates_per_step=n_updates / 50)
     agent = make_agent(algo, env, cfg, seed=0)
-    train(agent, 40)  # fills the buffer, fits the normaliser and compiles the block
+    stream = Stream.for_agent(agent, agent.env)
+    train(agent, stream, 40)  # fills the buffer, fits the normaliser and compiles the block
     keys = iter(jax.random.split(jax.random.PRNGKey(1), 10_000))
 
     def run():
-        agent.train_block(next(keys))
-        jax.block_until_ready(agent.state["log_alpha"])
+        agent.train_block(stream.buffer, next(keys))  # returns floats: the block is done
 
     run()
     return run

@@ -175,9 +175,6 @@ def test_acting_sees_what_training_sees_for_the_same_step(trained):
         np.testing.assert_allclose(batch["x_actor_next"][i, j], want_next, atol=1e-6)
 
 
-@pytest.mark.xfail(raises=KeyError, strict=True,
-                   reason="lili.agents.slac: predict with an acting state that has no SLAC "
-                          "history raises KeyError 'obs' instead of a clear ValueError")
 def test_predict_wants_the_acting_state_that_carries_the_history():
     """A state without SLAC's history (a latent agent's, or one made by hand) is refused.
 
@@ -189,7 +186,8 @@ def test_predict_wants_the_acting_state_that_carries_the_history():
     key = jax.random.PRNGKey(0)
     _, state = agent.predict(obs, agent.initial_state(), key=key)
     agent.predict(obs, state, key=key)
-    with pytest.raises(ValueError, match="SLAC acts on the interaction's history"):
+    with pytest.raises(ValueError, match="state=.* is invalid for slac; allowed: None or the "
+                                         "ActingState"):
         agent.predict(obs, LatentState(np.zeros(0), 3))
 
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from pathlib import Path
 from typing import Any, NoReturn
@@ -64,20 +63,6 @@ def _check_seed(seed: int, flag: str = "--seed") -> int:
         raise UsageError(str(e)) from None
 
 
-def _check_out(path: str, flag: str) -> None:
-    """UsageError unless ``path`` is a folder or can be made one, before anything is written."""
-    p = Path(path)
-    for folder in (p, *p.parents):
-        if folder.exists():
-            if not folder.is_dir():
-                raise UsageError(f"{flag} {path!r} is invalid: {str(folder)!r} is a file; "
-                                 "allowed: a folder, existing or to be created")
-            if not os.access(folder, os.W_OK | os.X_OK):
-                raise UsageError(f"{flag} {path!r} is invalid: {str(folder)!r} is not "
-                                 "writable; allowed: a folder you can write to")
-            return
-
-
 def _make_env(env_id: str, kwargs: dict[str, Any], render_mode: str | None = None):
     from lili.envs.checker import check_env_kwargs, load_env_class
 
@@ -121,7 +106,9 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.interactions < 1:
         raise UsageError(f"--interactions {args.interactions} is invalid; allowed: an integer >= 1")
     _check_seed(args.seed)
-    _check_out(args.out, "--out")
+    from lili.runs import check_out_dir
+
+    check_out_dir(args.out, "--out")
     config = load_config(args.config) if args.config else AgentConfig()
     check_extra(config)
     env_kwargs = _parse_kwargs(args.env_kwarg)

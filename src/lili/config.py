@@ -19,8 +19,20 @@ from typing import Any
 
 import yaml
 
-__all__ = ["AgentConfig", "load_config", "read_yaml", "yaml_value", "BOUNDARY_MODES",
-           "extra_options"]
+__all__ = ["check_seed", "MAX_SEED", "AgentConfig", "load_config", "read_yaml", "yaml_value",
+           "BOUNDARY_MODES", "extra_options"]
+
+MAX_SEED = 2**32 - 1
+"""Largest seed: NumPy's and JAX's generators take 32-bit seeds without folding them."""
+
+
+def check_seed(seed: Any, name: str = "seed") -> int:
+    """``seed`` as an int, or ValueError naming it and the allowed range (one rule for the
+    agents, the command line and ``check-env``)."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, numbers.Integral)) \
+            or not 0 <= seed <= MAX_SEED:
+        raise ValueError(f"{name}={seed!r} is invalid; allowed: an integer in [0, {MAX_SEED}]")
+    return int(seed)
 
 BOUNDARY_MODES = ("bootstrap", "influence", "cut", "same_z")
 

@@ -40,7 +40,7 @@ class Episodes:
         def act(o, s):
             if on_step is not None:
                 on_step(o, int(s.t))
-            return agent.act(o, s, jax.random.fold_in(k, int(s.t)), self.deterministic)
+            return agent.act(o, s, k, self.deterministic)
 
         done = rollout(self.env, self.obs, self.info, act, self.acting, agent.scale_action,
                        agent.horizon)

@@ -20,6 +20,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
 import platform
 import shutil
 import subprocess
@@ -36,9 +37,26 @@ from lili.train import Stream
 
 __all__ = ["RunLogger", "run_dir_for", "load_checkpoint", "METRIC_COLUMNS", "final_mean",
            "final_window", "latest_checkpoint", "read_run_config", "metric_columns",
-           "resume_run"]
+           "resume_run", "check_out_dir"]
 
 METRIC_COLUMNS = ("critic_loss", "actor_loss", "alpha", "rep_loss", "q", "entropy")
+
+
+def check_out_dir(path: str | Path, flag: str = "--out") -> Path:
+    """``path`` as a Path, or ValueError when it (or its nearest existing parent) is a file or
+    not writable: checked before anything is written (``lili train``, ``report``,
+    ``reproduce``)."""
+    p = Path(path)
+    for folder in (p, *p.parents):
+        if folder.exists():
+            if not folder.is_dir():
+                raise ValueError(f"{flag} {str(path)!r} is invalid: {str(folder)!r} is a file; "
+                                 "allowed: a folder, existing or to be created")
+            if not os.access(folder, os.W_OK | os.X_OK):
+                raise ValueError(f"{flag} {str(path)!r} is invalid: {str(folder)!r} is not "
+                                 "writable; allowed: a folder you can write to")
+            break
+    return p
 
 
 def run_dir_for(out: str | Path, env_id: str, algo: str, seed: int) -> Path:

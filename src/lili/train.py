@@ -196,11 +196,16 @@ class Stream:
 
 def _check_finite(i: int, traj: dict[str, np.ndarray], next_obs: np.ndarray,
                   metrics: dict[str, float]) -> None:
-    for name in ("obs", "rew", "next_obs"):
-        if not np.all(np.isfinite(traj[name])):
-            step = int(np.argwhere(~np.isfinite(traj[name]))[0][0])
-            raise NonFiniteError(f"interaction {i}: the env returned a non-finite {name} at step "
-                                 f"{step}; training stopped (the env must return finite values)")
+    if not np.all(np.isfinite(traj["obs"][0])):
+        raise NonFiniteError(f"interaction {i}: the env's reset() returned a non-finite "
+                             "observation; training stopped (the env must return finite values)")
+    bad_obs = ~np.isfinite(traj["next_obs"]).all(-1)
+    bad_rew = ~np.isfinite(traj["rew"])
+    if bad_obs.any() or bad_rew.any():
+        step = int(np.argmax(bad_obs | bad_rew))
+        what = "observation" if bad_obs[step] else "reward"
+        raise NonFiniteError(f"interaction {i}, step {step}: the env returned a non-finite "
+                             f"{what}; training stopped (the env must return finite values)")
     if not np.all(np.isfinite(next_obs)):
         raise NonFiniteError(f"interaction {i + 1}: the env's reset() returned a non-finite "
                              "observation; training stopped")
@@ -246,6 +251,8 @@ def train(
             or n_interactions < 0:
         raise ValueError(f"n_interactions={n_interactions!r} is invalid; allowed: an integer >= 0")
     env, cfg, buf = stream.env, agent.config, stream.buffer
+    # The agent's record of how long it trained (what it saves) is the stream it trains on.
+    agent.stream = stream
     obs, info = stream.start()
     acting = agent.next_state(buf)
     start = stream.count
@@ -268,7 +275,7 @@ def train(
                     return rng.uniform(-1.0, 1.0, agent.act_dim), s
             else:
                 def act(o, s, key=act_key):
-                    return agent.act(o, s, jax.random.fold_in(key, int(s.t)), False)
+                    return agent.act(o, s, key, False)
 
             done = rollout(env, obs, info, act, acting, agent.scale_action, agent.horizon)
             obs, info = env.reset()

@@ -10,10 +10,12 @@ from __future__ import annotations
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import flax.struct
-import gymnasium as gym
 import jax
 import jax.numpy as jnp
 import numpy as np
+
+from lili.config import MAX_SEED, check_seed
+from lili.envs.core import env_horizon
 
 __all__ = ["ActingState", "AgentState", "Normaliser", "CheckpointError", "Agent", "Params",
            "check_seed", "env_horizon", "MAX_SEED"]
@@ -21,44 +23,8 @@ __all__ = ["ActingState", "AgentState", "Normaliser", "CheckpointError", "Agent"
 Params = Any
 """A Flax parameter tree (nested dicts of arrays)."""
 
-MAX_SEED = 2**32 - 1
-"""Largest seed: NumPy's and JAX's generators take 32-bit seeds without folding them."""
-
-
 class CheckpointError(ValueError):
     """A checkpoint or saved agent is corrupt or does not match the agent or env."""
-
-
-def check_seed(seed: Any, name: str = "seed") -> int:
-    """``seed`` as an int, or ValueError naming it and the allowed range."""
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) \
-            or not 0 <= seed <= MAX_SEED:
-        raise ValueError(f"{name}={seed!r} is invalid; allowed: an integer in [0, {MAX_SEED}]")
-    return int(seed)
-
-
-def env_horizon(env: gym.Env) -> int:
-    """The interaction length H of ``env``.
-
-    ``env.unwrapped.horizon`` where the env defines it (every ``RepeatedInteractionEnv`` does),
-    else the ``max_episode_steps`` of its spec, else that of a ``TimeLimit`` wrapper; otherwise
-    one ValueError that says how to give one.
-    """
-    h = getattr(env.unwrapped, "horizon", None)
-    if h is None and env.spec is not None:
-        h = env.spec.max_episode_steps
-    inner = env
-    while h is None and isinstance(inner, gym.Wrapper):
-        if isinstance(inner, gym.wrappers.TimeLimit):
-            h = inner._max_episode_steps
-        inner = inner.env
-    if isinstance(h, bool) or not isinstance(h, (int, np.integer)) or h < 1:
-        raise ValueError(
-            f"env {type(env.unwrapped).__name__} has no interaction length (horizon={h!r}); "
-            "allowed: an integer `horizon` >= 1 on the env (a RepeatedInteractionEnv has one), "
-            "or register it with max_episode_steps, or wrap it in gymnasium's TimeLimit"
-        )
-    return int(h)
 
 
 @flax.struct.dataclass

@@ -74,7 +74,7 @@ import numpy as np
 
 from lili.agents.base import ActingState, AgentState, Normaliser, Params
 from lili.agents.lili import decoder_loss
-from lili.agents.sac import SAC, SACCore, register, sg
+from lili.agents.sac import SAC, SACCore, register, register_options, sg
 from lili.buffer import Batch, InteractionBuffer, Window
 from lili.config import AgentConfig, extra_options
 from lili.dists import gaussian_kl, soft_clip_log_std
@@ -303,3 +303,4 @@ class LILAC(SAC):
 
 
 register("lilac", LILAC)
+register_options("lilac", _options)

@@ -22,6 +22,9 @@ interactions the training loop plays (:class:`lili.train.Stream`).
 from __future__ import annotations
 
 import json
+import math
+from collections.abc import Callable
+from functools import cache, partial
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -49,12 +52,23 @@ from lili.dists import tanh_gaussian
 from lili.nets import Actor, TwinCritic
 
 __all__ = ["SAC", "SACCore", "Oracle", "CheckpointError", "ActingState", "read_agent_file",
-           "AGENT_FORMAT", "AGENTS", "register", "make_agent", "load_agent"]
+           "AGENT_FORMAT", "AGENTS", "register", "make_agent", "load_agent", "check_extra",
+           "register_options", "OPTIONS"]
 
 sg = jax.lax.stop_gradient
 
 AGENT_FORMAT = "lili-agent-2"
 """Version tag of saved agent files (2: the typed ``AgentState``)."""
+
+
+@cache
+def core_jit(method: str, *static_names: str) -> Callable[..., Any]:
+    """``core.<method>(...)`` jitted once for all cores, the core being a static argument."""
+
+    def call(core: SACCore, *args: Any, **kwargs: Any) -> Any:
+        return getattr(core, method)(*args, **kwargs)
+
+    return jax.jit(call, static_argnums=0, static_argnames=static_names or None)
 
 
 class SACCore:
@@ -81,9 +95,20 @@ class SACCore:
             else float(config.target_entropy)
         )
         self._build()
-        self.jit_block = jax.jit(self.block)
-        self.jit_act = jax.jit(self._act, static_argnames="deterministic")
-        self.jit_latent = jax.jit(self._act_latent)
+        self._key = (type(self), self.obs_dim, self.act_dim, self.horizon, self.boundary,
+                     json.dumps(config.to_dict(), sort_keys=True))
+        self.jit_block = partial(core_jit("block"), self)
+        self.jit_act = partial(core_jit("_act_step", "deterministic"), self)
+        self.jit_latent = partial(core_jit("_act_latent"), self)
+
+    # Cores with the same class, sizes and config are the same maths: equal and hashable, so
+    # the compiled functions (jitted with the core as a static argument) are shared between
+    # them: loading a checkpoint or evaluating a copy of an agent compiles nothing new.
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, SACCore) and self._key == other._key
+
+    def __hash__(self) -> int:
+        return hash(self._key)
 
     # -- construction --------------------------------------------------------------------------
     def _build(self) -> None:
@@ -317,8 +342,17 @@ class SACCore:
 
     def act(self, state: AgentState, obs: jax.Array, acting: ActingState, key: jax.Array,
             deterministic: bool) -> tuple[jax.Array, ActingState]:
-        """The network's action in [-1, 1] for ``obs`` and the acting state of the next step."""
-        return self._act(state.actor, state.norm, obs, acting, key, deterministic)
+        """The network's action in [-1, 1] for ``obs`` and the acting state of the next step.
+
+        ``key`` is the interaction's key: step t samples with ``fold_in(key, t)``, so one key
+        serves a whole interaction and the loop needs no per-step key of its own.
+        """
+        return self._act_step(state.actor, state.norm, obs, acting, key, deterministic)
+
+    def _act_step(self, actor: Params, norm: Normaliser, obs: jax.Array, acting: ActingState,
+                  key: jax.Array, deterministic: bool) -> tuple[jax.Array, ActingState]:
+        return self._act(actor, norm, obs, acting, jax.random.fold_in(key, acting.t),
+                         deterministic)
 
     def _act(self, actor: Params, norm: Normaliser, obs: jax.Array, acting: ActingState,
              key: jax.Array, deterministic: bool) -> tuple[jax.Array, ActingState]:
@@ -372,6 +406,7 @@ class SAC:
     def __init__(self, env: gym.Env | str, config: AgentConfig | dict | None = None,
                  seed: int = 0) -> None:
         self.config = _as_config(config)
+        check_extra(self.config)
         self.seed = check_seed(seed)
         self.env = self._wrap(_as_env(env))
         obs_space, act_space = self.env.observation_space, self.env.action_space
@@ -440,7 +475,8 @@ class SAC:
 
     def act(self, observation: np.ndarray, state: ActingState, key: jax.Array,
             deterministic: bool) -> tuple[np.ndarray, ActingState]:
-        """The network's action in [-1, 1] (what the buffer stores) and the next acting state."""
+        """The network's action in [-1, 1] (what the buffer stores) and the next acting state;
+        ``key`` is the interaction's (see :meth:`SACCore.act`)."""
         a, state = self.core.jit_act(self.state.actor, self.state.norm,
                                      np.asarray(observation, np.float32), state, key,
                                      deterministic=deterministic)
@@ -459,10 +495,15 @@ class SAC:
         (start with :meth:`initial_state`, or None); pass the returned state back on the next
         step, and at the start of the next interaction use :meth:`next_state`.
         """
-        state = self.initial_state() if state is None else state
-        if not isinstance(state, ActingState):
-            raise ValueError(f"state={state!r} is invalid; allowed: None or the ActingState "
-                             "that initial_state(), next_state() or predict() returned")
+        fresh = self.initial_state()
+        state = fresh if state is None else state
+        shapes = jax.tree_util.tree_map(np.shape, (state.z, state.memory)) \
+            if isinstance(state, ActingState) else None
+        if shapes != jax.tree_util.tree_map(np.shape, (fresh.z, fresh.memory)):
+            # e.g. another agent's state, or one without the history SLAC acts on.
+            raise ValueError(f"state={state!r} is invalid for {self.algo}; allowed: None or the "
+                             "ActingState that its initial_state(), next_state() or predict() "
+                             "returned")
         obs = np.asarray(observation, np.float32)
         if obs.shape != (self.obs_dim,):
             raise ValueError(f"observation has shape {obs.shape}; expected ({self.obs_dim},)")
@@ -567,6 +608,31 @@ class SAC:
 
 AGENTS: dict[str, tuple[type[SAC], dict[str, Any]]] = {}
 """Every algo name -> (facade class, its extra constructor arguments); see :func:`register`."""
+
+
+OPTIONS: dict[str, Callable[[AgentConfig], Any]] = {}
+"""Agents with options of their own (``AgentConfig.extra[name]``) -> the function that checks
+them; see :func:`register_options`."""
+
+
+def register_options(name: str, check: Callable[[AgentConfig], Any]) -> None:
+    """Make ``extra[name]`` known to :func:`check_extra` (``check(config)`` raises ValueError)."""
+    OPTIONS[name] = check
+
+
+def check_extra(config: AgentConfig) -> None:
+    """ValueError unless every entry of ``config.extra`` is an agent with options and its
+    options are valid, whichever algo the config is for: an entry no agent reads (``extra:
+    {slac: {bogus: 1}}`` with ``--algo lili``) would otherwise be ignored silently."""
+    for key in config.extra:
+        if key not in OPTIONS:
+            raise ValueError(f"config extra.{key} is invalid: {key!r} is not an agent with "
+                             f"options; allowed: {', '.join(OPTIONS)}")
+        for name, value in config.extra[key].items():
+            if isinstance(value, float) and not math.isfinite(value):
+                raise ValueError(f"config extra.{key}.{name}={value!r} is invalid; allowed: a "
+                                 "finite number")
+        OPTIONS[key](config)
 
 
 def register(algo: str, cls: type[SAC], **kwargs: Any) -> None:

@@ -70,6 +70,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from functools import partial
 from typing import Any
 
 import flax.linen as nn
@@ -79,7 +80,7 @@ import numpy as np
 import optax
 
 from lili.agents.base import ActingState, AgentState, Normaliser, Params
-from lili.agents.sac import SAC, SACCore, register, sg
+from lili.agents.sac import SAC, SACCore, core_jit, register, register_options, sg
 from lili.buffer import InteractionBuffer, sample
 from lili.config import AgentConfig, extra_options
 from lili.dists import gaussian_kl, gaussian_logp, tanh_gaussian
@@ -322,8 +323,8 @@ class SLACCore(SACCore):
                              "bootstrap, cut or null (= bootstrap)")
         self.options = _options(config)
         super().__init__(obs_dim, act_dim, horizon, config, boundary)
-        self.jit_model_step = jax.jit(self._model_step)
-        self.jit_model_batch = jax.jit(self._model_batch)
+        self.jit_model_step = partial(core_jit("_model_step"), self)
+        self.jit_model_batch = partial(core_jit("_model_batch"), self)
 
     # -- construction --------------------------------------------------------------------------
     def _build(self) -> None:
@@ -594,3 +595,4 @@ class SLAC(SAC):
 
 
 register("slac", SLAC)
+register_options("slac", _options)

@@ -25,8 +25,8 @@ from gymnasium.envs.registration import load_env_creator
 from gymnasium.utils.env_checker import check_env as gym_check_env
 
 from lili.buffer import check_buffer_fits
-from lili.config import AgentConfig
-from lili.envs.core import ENV_ALIASES, RepeatedInteractionEnv, register_envs
+from lili.config import AgentConfig, check_seed
+from lili.envs.core import ENV_ALIASES, RepeatedInteractionEnv, env_horizon, register_envs
 from lili.envs.wrappers import OracleObservation
 
 __all__ = ["EnvContractError", "check_env", "load_env_class", "check_env_kwargs",
@@ -116,9 +116,7 @@ def check_env(
             or not 2 <= n_interactions <= MAX_INTERACTIONS:
         raise ValueError(f"n_interactions={n_interactions!r} is invalid; allowed: an integer in "
                          f"[2, {MAX_INTERACTIONS}]")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) \
-            or not 0 <= seed <= 2**32 - 1:
-        raise ValueError(f"seed={seed!r} is invalid; allowed: an integer in [0, {2**32 - 1}]")
+    check_seed(seed)
     if buffer_capacity is None:
         buffer_capacity = AgentConfig().buffer_capacity
     if isinstance(env_or_factory, str):
@@ -130,7 +128,7 @@ def check_env(
         name = type(env.unwrapped).__name__ if isinstance(env, gym.Env) else type(env).__name__
         _check_wrappers(env, name)
         inner = env.unwrapped
-        horizon = _check_attributes(inner, name)
+        horizon = _check_attributes(env, name)
         _check_time_limit(env, horizon, name)
         _check_spaces(env, name)
         _check_memory(env, horizon, max(buffer_capacity, 2 * n_interactions), name)
@@ -290,8 +288,9 @@ def _check_wrappers(env: gym.Env, name: str) -> None:
             "OracleObservation (the Oracle baseline adds it itself)")
 
 
-def _check_attributes(inner: gym.Env, name: str) -> int:
-    """Check ``strategy_space`` and ``horizon`` on the unwrapped env; return the horizon."""
+def _check_attributes(env: gym.Env, name: str) -> int:
+    """Check ``strategy_space`` on the unwrapped env and the interaction length; return it."""
+    inner = env.unwrapped
     subclass = isinstance(inner, RepeatedInteractionEnv)
     how = "" if subclass else " (it does not subclass RepeatedInteractionEnv, so it must define " \
         "the same attributes itself)"
@@ -301,17 +300,19 @@ def _check_attributes(inner: gym.Env, name: str) -> int:
         raise _fail(name, f"env.unwrapped.strategy_space is missing{how} "
                     f"({type(exc).__name__}: {exc})",
                     "a strategy_space attribute, a gymnasium.spaces.Box of the strategy vector "
-                    "reported in info['strategy']") from exc
+                    "reported in info['strategy'] (without one, SAC and LILI still train on the "
+                    "env, but the Oracle and these checks need it)") from exc
     if not isinstance(strategy_space, spaces.Box) or len(strategy_space.shape) != 1 \
             or not np.issubdtype(strategy_space.dtype, np.floating):
         raise _fail(name, f"strategy_space is {strategy_space!r}{how}",
                     "strategy_space to be a 1-D float gymnasium.spaces.Box (the strategy is a "
                     "fixed size float32 vector)")
-    horizon = getattr(inner, "horizon", None)
-    if isinstance(horizon, bool) or not isinstance(horizon, (int, np.integer)) or horizon < 1:
-        raise _fail(name, f"env.unwrapped.horizon is {horizon!r}{how}",
-                    "an integer horizon >= 1, the most steps an interaction can take")
-    return int(horizon)
+    try:
+        return env_horizon(env)
+    except ValueError as exc:
+        raise _fail(name, f"{exc}{how}", "an interaction length: an integer horizon >= 1 (the "
+                    "most steps an interaction can take), max_episode_steps or a TimeLimit") \
+            from None
 
 
 def _check_time_limit(env: gym.Env, horizon: int, name: str) -> None:

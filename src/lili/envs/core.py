@@ -19,7 +19,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-__all__ = ["Partner", "RepeatedInteractionEnv", "register_envs", "ENV_ALIASES", "resolve_env_id"]
+__all__ = ["Partner", "RepeatedInteractionEnv", "register_envs", "ENV_ALIASES", "resolve_env_id",
+           "env_horizon"]
 
 
 @runtime_checkable
@@ -188,3 +189,27 @@ def register_envs() -> None:
             # No max_episode_steps: the env ends its own interactions at its horizon, so that the
             # partner update happens inside the env and not in a wrapper.
             gym.register(id=env_id, entry_point=entry)
+
+
+def env_horizon(env: gym.Env) -> int:
+    """The interaction length H of ``env``.
+
+    ``env.unwrapped.horizon`` where the env defines it (every ``RepeatedInteractionEnv`` does),
+    else the ``max_episode_steps`` of its spec, else that of a ``TimeLimit`` wrapper; otherwise
+    one ValueError that says how to give one.
+    """
+    h = getattr(env.unwrapped, "horizon", None)
+    if h is None and env.spec is not None:
+        h = env.spec.max_episode_steps
+    inner = env
+    while h is None and isinstance(inner, gym.Wrapper):
+        if isinstance(inner, gym.wrappers.TimeLimit):
+            h = inner._max_episode_steps
+        inner = inner.env
+    if isinstance(h, bool) or not isinstance(h, (int, np.integer)) or h < 1:
+        raise ValueError(
+            f"env {type(env.unwrapped).__name__} has no interaction length (horizon={h!r}); "
+            "allowed: an integer `horizon` >= 1 on the env (a RepeatedInteractionEnv has one), "
+            "or register it with max_episode_steps, or wrap it in gymnasium's TimeLimit"
+        )
+    return int(h)

@@ -13,7 +13,7 @@ from lili.experiments.plan import RunSpec, plan, run_status
 from lili.experiments.presets import get_preset
 from lili.experiments.progress import SweepProgress
 from lili.experiments.runner import log_path, rows_logged, write_agent_configs
-from lili.report.write import check_out_dir
+from lili.runs import check_out_dir
 
 __all__ = ["reproduce", "LOCAL_JOBS"]
 

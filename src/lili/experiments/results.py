@@ -10,7 +10,8 @@ from lili.experiments.plan import RunSpec
 from lili.experiments.presets import PRESETS, Preset
 from lili.report import PAPER_TABLES, find_runs, write_report
 from lili.report.variants import plot_variants, variant_markdown, variant_rows
-from lili.report.write import check_out_dir, json_safe
+from lili.report.write import json_safe
+from lili.runs import check_out_dir
 
 __all__ = ["write_preset_report"]
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -21,6 +20,7 @@ from lili.report.paper import PAPER
 from lili.report.stats import strategy_frequencies, summarize
 from lili.report.style import env_key
 from lili.report.tables import markdown_table
+from lili.runs import check_out_dir
 
 __all__ = ["write_report", "json_safe", "check_out_dir"]
 
@@ -36,20 +36,6 @@ def json_safe(value: Any) -> Any:
     if isinstance(value, np.integer):
         return int(value)
     return value
-
-
-def check_out_dir(out_dir: str | Path) -> Path:
-    """``out_dir`` as a Path, or ValueError when it (or a parent) is a file or not writable."""
-    out_dir = Path(out_dir)
-    for folder in (out_dir, *out_dir.parents):
-        if folder.exists():
-            if not folder.is_dir():
-                raise ValueError(f"--out {out_dir} is invalid: {folder} is a file; allowed: a "
-                                 "folder (new or existing)")
-            if not os.access(folder, os.W_OK | os.X_OK):
-                raise ValueError(f"--out {out_dir} is invalid: {folder} is not writable")
-            break
-    return out_dir
 
 
 def write_report(paths: Sequence[str | Path], out_dir: str | Path,
