@@ -204,7 +204,7 @@ CASES = [
      ["buffer_capacity=30", "an integer >= 50"]),
     ("extra: {slac: 5}", _config("extra: {slac: 5}\n", "lili"), ["extra.slac=5", "a mapping"]),
     ("extra: {sac: {x: 1}}", _config("extra: {sac: {x: 1}}\n", "lili"),
-     ["extra.sac", "allowed: slac, lilac"]),
+     ["extra.sac", "allowed: lilac, slac"]),
     ("extra: {lilac: {kl_weight: .inf}}", _config("extra: {lilac: {kl_weight: .inf}}\n", "lili"),
      ["extra.lilac.kl_weight=inf", "finite"]),
     ("--env-kwarg history twice", _train("--env-kwarg", "history=2", "--env-kwarg", "history=3"),

@@ -263,7 +263,7 @@ def test_check_env_accepts_an_instance_and_leaves_it_usable() -> None:
         (GlobalRandomStartEnv, ["gymnasium's env checker failed", "not equivalent", "np.random"]),
         (functools.partial(DuckEnv, end_at=20),
          ["interaction 0 did not end within horizon=5", "terminated or truncated"]),
-        (functools.partial(DuckEnv, horizon=0), ["horizon is 0", "does not subclass"]),
+        (functools.partial(DuckEnv, horizon=0), ["horizon=0", "does not subclass"]),
         (NoStrategySpaceEnv, ["strategy_space is None", "1-D float"]),
         (DiscreteActionEnv, ["action space is Discrete(3)", "continuous"]),
         (Float64StrategyEnv, ["dtype float64", "float32"]),

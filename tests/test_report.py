@@ -443,7 +443,7 @@ def test_report_out_is_a_file_is_an_error(tmp_path: Path) -> None:
     folder = _write_run(tmp_path, PM, "lili", 0)
     target = tmp_path / "taken.txt"
     target.write_text("keep me")
-    with pytest.raises(ValueError, match=f"--out {target} is invalid: {target} is a file"):
+    with pytest.raises(ValueError, match=f"--out '{target}' is invalid: '{target}' is a file"):
         write_report([folder], target)
     assert main(["report", str(folder), "--out", str(target / "sub")]) == 2
     assert target.read_text() == "keep me"

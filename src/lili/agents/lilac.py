@@ -297,10 +297,6 @@ class LILAC(SAC):
     algo = "lilac"
     core_cls = LILACCore
 
-    @property
-    def options(self) -> dict[str, Any]:
-        return self.core.options
-
 
 register("lilac", LILAC)
 register_options("lilac", _options)

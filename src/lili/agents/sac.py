@@ -447,6 +447,11 @@ class SAC:
         return self.core.latent_dim
 
     @property
+    def options(self) -> dict[str, Any]:
+        """The agent's own options (``AgentConfig.extra[name]`` resolved; SLAC, LILAC)."""
+        return getattr(self.core, "options", {})
+
+    @property
     def num_interactions(self) -> int:
         """Interactions this agent has been trained on."""
         return self.stream.count if self.stream is not None else self.trained_interactions
@@ -627,7 +632,7 @@ def check_extra(config: AgentConfig) -> None:
     for key in config.extra:
         if key not in OPTIONS:
             raise ValueError(f"config extra.{key} is invalid: {key!r} is not an agent with "
-                             f"options; allowed: {', '.join(OPTIONS)}")
+                             f"options; allowed: {', '.join(sorted(OPTIONS))}")
         for name, value in config.extra[key].items():
             if isinstance(value, float) and not math.isfinite(value):
                 raise ValueError(f"config extra.{key}.{name}={value!r} is invalid; allowed: a "

@@ -589,10 +589,6 @@ class SLAC(SAC):
     algo = "slac"
     core_cls = SLACCore
 
-    @property
-    def options(self) -> dict[str, Any]:
-        return self.core.options
-
 
 register("slac", SLAC)
 register_options("slac", _options)
