@@ -107,16 +107,21 @@ def worker(threads: int, interactions: int) -> dict:
     return out
 
 
-def _flags(threads: int) -> str:
+def _env(threads: int) -> dict[str, str]:
+    """The worker's environment: one XLA thread, or XLA's default (a thread pool over every
+    core, which is 2 on the machines this was measured on)."""
+    env = {k: v for k, v in os.environ.items() if k != "XLA_FLAGS"}
     if threads == 1:
-        return "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
-    return f"intra_op_parallelism_threads={threads}"
+        env["XLA_FLAGS"] = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
+    env["OMP_NUM_THREADS"] = str(threads)
+    return env
 
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--interactions", type=int, default=60, help="timed interactions per agent")
-    p.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    p.add_argument("--threads", type=int, nargs="+", default=[1, 2],
+                   help="1 = one XLA thread; more = XLA's default thread pool (all cores)")
     p.add_argument("--worker", type=int, help=argparse.SUPPRESS)
     args = p.parse_args()
     if args.interactions < 1 or any(t < 1 for t in args.threads):
@@ -126,10 +131,11 @@ def main() -> None:
         return
     rows = []
     for threads in args.threads:
-        env = dict(os.environ, XLA_FLAGS=_flags(threads), OMP_NUM_THREADS=str(threads))
         res = subprocess.run([sys.executable, __file__, "--worker", str(threads),
                               "--interactions", str(args.interactions)],
-                             capture_output=True, text=True, env=env, check=True)
+                             capture_output=True, text=True, env=_env(threads))
+        if res.returncode != 0:
+            sys.exit(f"the worker with {threads} thread(s) failed:\n{res.stderr[-3000:]}")
         rows.append(json.loads(res.stdout.strip().splitlines()[-1]))
     lines = ["| XLA threads | agent | env steps/s (end to end) | ms / update in the loop | "
              "ms / update, block alone | loop efficiency | x SB3 learn() |",
