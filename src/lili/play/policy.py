@@ -9,7 +9,6 @@ and the buffer of finished interactions). The latent is updated exactly as in tr
 
 from __future__ import annotations
 
-import json
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -28,22 +27,11 @@ def agent_file_for_run(run: str | Path) -> tuple[Path, dict[str, Any]]:
 
     Raises ValueError naming the folder when it is not a run folder or has no checkpoint.
     """
-    import yaml
+    from lili.runs import latest_checkpoint, read_run_config
 
-    run_dir = Path(run)
-    cfg_path = run_dir / "config.yaml"
-    if not cfg_path.is_file():
-        raise ValueError(f"--run {str(run_dir)!r} is not a run folder (config.yaml is missing)")
-    try:
-        cfg = yaml.safe_load(cfg_path.read_text())
-        ptr = json.loads((run_dir / "checkpoints" / "latest.json").read_text())
-        path = run_dir / "checkpoints" / ptr["checkpoint"] / "agent.msgpack"
-    except Exception:
-        raise ValueError(f"--run {str(run_dir)!r} has no readable checkpoint "
-                         "(checkpoints/latest.json is missing or corrupt)") from None
-    if not isinstance(cfg, dict) or not path.is_file():
-        raise ValueError(f"--run {str(run_dir)!r} has no agent file at {path}")
-    return path, cfg
+    cfg = read_run_config(run)
+    ck, _ = latest_checkpoint(run)
+    return ck / "agent.msgpack", cfg
 
 
 class Blocker:

@@ -1,0 +1,86 @@
+"""Trained blockers against the human-like bot striker: blocks out of 40, beside the paper.
+
+    python benchmarks/play_bot.py LABEL=RUN_GLOB [LABEL=RUN_GLOB ...] [--shots 40] [--sessions 3]
+
+Each ``RUN_GLOB`` names air hockey run folders (one per training seed); every run plays
+``--sessions`` sessions of ``--shots`` shots against :class:`lili.play.striker.BotStriker` (the
+paper's protocol: the striker aims away from where the blocker blocked it last, with aim noise
+and lapses) through the same game session as the page. Prints blocks per 40 shots (mean +- s.e.
+over runs, each run's mean over sessions) and blocks by the shot's mode beside the paper's
+expert-human study (SAC 18/40, LILI (no influence) 29/40), and writes
+``benchmarks/results/play_bot.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+from pathlib import Path
+
+import numpy as np
+
+from lili.play.bot import PAPER_HUMAN, run_bot
+from lili.play.policy import Blocker, agent_file_for_run, make_play_env
+from lili.play.striker import MODE_NAMES, BotConfig
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def score_run(run: str, shots: int, sessions: int, config: BotConfig) -> dict:
+    path, cfg = agent_file_for_run(run)
+    env_kwargs = dict(cfg.get("env_kwargs") or {})
+    blocker = Blocker.load(path, make_play_env(env_kwargs))
+    blocks, by_mode = [], np.zeros((len(MODE_NAMES), 2))
+    for s in range(sessions):
+        res = run_bot(blocker, env_kwargs, shots, config, seed=s)
+        blocks.append(res["blocks"] * 40 / res["shots"])
+        for j, name in enumerate(MODE_NAMES):
+            by_mode[j] += res["by_mode"][name]  # [blocks, shots]
+    return {"run": run, "algo": blocker.algo, "env_kwargs": env_kwargs,
+            "blocks_per_40": float(np.mean(blocks)), "sessions": blocks,
+            "by_mode": {n: by_mode[j].tolist() for j, n in enumerate(MODE_NAMES)}}
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("groups", nargs="+", metavar="LABEL=RUN_GLOB")
+    p.add_argument("--shots", type=int, default=40)
+    p.add_argument("--sessions", type=int, default=3)
+    p.add_argument("--aim-noise", type=float, default=BotConfig.aim_noise)
+    p.add_argument("--lapse", type=float, default=BotConfig.lapse)
+    args = p.parse_args()
+    config = BotConfig(aim_noise=args.aim_noise, lapse=args.lapse)
+    rows, out = [], []
+    for group in args.groups:
+        if "=" not in group:
+            p.error(f"{group!r} is invalid; allowed: LABEL=RUN_GLOB")
+        label, pattern = group.split("=", 1)
+        runs = sorted(glob.glob(pattern))
+        if not runs:
+            p.error(f"{pattern!r} matches no run folder")
+        scores = [score_run(r, args.shots, args.sessions, config) for r in runs]
+        values = np.array([s["blocks_per_40"] for s in scores])
+        se = values.std(ddof=1) / np.sqrt(len(values)) if len(values) > 1 else 0.0
+        modes = {n: np.sum([s["by_mode"][n] for s in scores], 0) for n in MODE_NAMES}
+        algo = scores[0]["algo"]
+        paper = f"{PAPER_HUMAN[algo]}/40" if algo in PAPER_HUMAN else "—"
+        rows.append(f"| {label} | {len(runs)} | {values.mean():.1f} ± {se:.1f} | "
+                    + " | ".join(f"{modes[n][0] / max(modes[n][1], 1):.0%}" for n in MODE_NAMES)
+                    + f" | {paper} |")
+        out.append({"label": label, "runs": scores, "mean": float(values.mean()),
+                    "se": float(se)})
+    table = "\n".join([f"bot: aim noise {config.aim_noise} rad, lapse {config.lapse}; "
+                       f"{args.sessions} sessions of {args.shots} shots per run", "",
+                       "| blocker | runs | blocks / 40 (mean ± s.e.) | "
+                       + " | ".join(f"{n} blocked" for n in MODE_NAMES)
+                       + " | paper (expert human) |",
+                       "|---|---:|---:|" + "---:|" * len(MODE_NAMES) + "---|", *rows])
+    print(table)
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "play_bot.json").write_text(json.dumps({"table": table, "groups": out},
+                                                      indent=1))
+
+
+if __name__ == "__main__":
+    main()
