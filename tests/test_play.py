@@ -53,9 +53,11 @@ def make_run_folder(root: Path, agent_file: Path, env: str = "lili/AirHockey-v0"
     ck = run / "checkpoints" / "ckpt_0"
     ck.mkdir(parents=True)
     shutil.copy(agent_file, ck / "agent.msgpack")
-    (run / "checkpoints" / "latest.json").write_text(json.dumps({"checkpoint": "ckpt_0"}))
+    (run / "checkpoints" / "latest.json").write_text(json.dumps({"checkpoint": "ckpt_0",
+                                                                "interactions": 0}))
     (run / "config.yaml").write_text(yaml.safe_dump({"env": env, "env_kwargs": {},
-                                                     "algo": "lili", "seed": 0}))
+                                                     "algo": "lili", "seed": 0,
+                                                     "interactions": 0, "agent": {}}))
     return run
 
 

@@ -117,7 +117,7 @@ def test_out_is_a_file(tmp_path: Path, capsys) -> None:
     (tmp_path / "f").write_text("x")
     assert main(["reproduce", "point-mass", "--out", str(tmp_path / "f")]) == 2
     f = tmp_path / "f"
-    assert f"--out {f} is invalid: {f} is a file" in capsys.readouterr().err
+    assert f"--out '{f}' is invalid: '{f}' is a file" in capsys.readouterr().err
 
 
 def test_ray_without_the_extra(tmp_path: Path) -> None:

@@ -101,6 +101,7 @@ def test_evaluate_reports_per_interaction_metrics():
         evaluate(agent, n_interactions=0)
 
 
+@pytest.mark.slow  # 4-5 CPU-minutes; tests/test_readme.py keeps a learning test in the suite
 def test_lili_learns_driving_2d():
     """LILI beats a random policy by far on Driving (2D) within a small budget (fixed seed).
 
