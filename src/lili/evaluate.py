@@ -24,11 +24,14 @@ class Episodes:
     :func:`evaluate` and by step-by-step drivers (the play page, videos).
     """
 
-    def __init__(self, agent: Any, env: gym.Env, seed: int, deterministic: bool = True) -> None:
+    def __init__(self, agent: Any, env: gym.Env, seed: int, deterministic: bool = True,
+                 key_seed: int | None = None) -> None:
+        """``seed`` starts the env's sequence; ``key_seed`` (default ``seed``) the actions'
+        noise when ``deterministic`` is False."""
         self.agent, self.env, self.deterministic = agent, env, deterministic
         self.buffer = InteractionBuffer(max(2, agent.history + 1), agent.horizon, agent.obs_dim,
                                         agent.act_dim)
-        self.key = jax.random.PRNGKey(seed)
+        self.key = jax.random.PRNGKey(seed if key_seed is None else key_seed)
         self.obs, self.info = env.reset(seed=seed)
         self.acting = agent.initial_state()
         self.index = 0
@@ -74,9 +77,7 @@ def evaluate(
         raise ValueError(f"n_interactions={n_interactions!r} is invalid; allowed: an integer >= 1")
     env = agent.env if env is None else agent._wrap(env)
     episodes = Episodes(agent, env, agent.seed if seed is None else check_seed(seed),
-                        deterministic)
-    if seed is None:
-        episodes.key = jax.random.PRNGKey(0)
+                        deterministic, key_seed=0 if seed is None else seed)
     on_step = None if frames is None else (lambda o, t: frames.append(env.render()))
     out: dict[str, list] = {"returns": [], "successes": [], "strategies": [], "strategy_ids": []}
     for _ in range(n_interactions):

@@ -4,7 +4,7 @@ Everything the page needs from a trained blocker goes through :class:`Blocker` (
 connections: it holds the parameters) and :class:`BlockerGame` (one per game: the acting state
 and the buffer of finished interactions). The latent is updated exactly as in training and in
 ``lili.evaluate``: z^1 = 0, and after interaction i ends, z^{i+1} = E(tau^i) with
-``agent.next_latent_state(buffer)`` on an InteractionBuffer holding the finished interactions.
+``agent.next_state(buffer)`` on an InteractionBuffer holding the finished interactions.
 """
 
 from __future__ import annotations
@@ -107,7 +107,7 @@ class BlockerGame:
         """
         traj = {k: np.asarray(v, np.float32) for k, v in self._traj.items()}
         self.buffer.add(traj, np.asarray(next_first_obs, np.float32))
-        self._next = self.agent.next_latent_state(self.buffer)
+        self._next = self.agent.next_state(self.buffer)
         self._traj = {k: [] for k in self._traj}
         return self.latent
 
