@@ -1,33 +1,41 @@
 """The influence suite: scripted no-information, greedy and influencing policies per env, and
 (with ``--algos``) learned agents beside them with the gap each closes from SAC to the
-influencer.
+influencer, and (with ``--ablate``) LILI variants, one changed option each.
 
     python benchmarks/influence.py                          # scripted policies only (~30 s)
-    python benchmarks/influence.py --algos sac lili-no-influence lili oracle \\
-        --interactions 600 --seeds 3                        # + learned agents (lili train)
+    python benchmarks/influence.py --algos sac lili-no-influence lili oracle   # + learned
+    python benchmarks/influence.py --algos sac lili-no-influence lili \
+        --ablate gamma=0.999 --ablate updates_per_step=4     # + one LILI row per variant
 
 Scripted rows: the mean return per interaction over the last ``--last`` of ``--scripted``
 interactions (Point Mass: 3000 and 2000, because its greedy target random-walks slowly),
-seeds 0-1, beside the value derived in each env's docstring. Learned rows: ``lili train``
-runs (one per algo and seed, one at a time, skipped when finished, resumed when
-interrupted) under ``runs/bench_influence/``, scored as the mean return over the last 10% of
-interactions of each seed, mean +- s.e. over seeds. Gap closed = (R - R_SAC) / (R_influencer -
-R_SAC). Writes ``benchmarks/results/influence.{json,md}``.
+seeds 0-1, beside the value derived in each env's docstring. Learned rows are the runs of the
+``influence`` preset of ``lili reproduce`` (2000 interactions, 3 seeds by default; finished
+runs are skipped, killed ones resumed; ``--jobs`` at a time) under ``--out``; an ablation
+``FIELD=VALUE[,FIELD=VALUE]`` is the preset's LILI runs with those agent-config fields
+(``lili reproduce influence --algos lili --set ...``) under ``--out``/ablate/<variant>. Each
+seed scores the mean return over the last 10% of its interactions (mean +- s.e. over seeds).
+Gap closed = (R - R_SAC) / (R_influencer - R_SAC); "held" = the share of those interactions
+in which the partner was at a strategy the scripted influencer holds it at
+(:data:`lili.envs.influence.HELD`), the behavioural evidence of influence; "vs no influence" =
+R - R_LILI(no influence) in units of their combined standard errors. Writes
+``benchmarks/results/<--name>.{json,md}``.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 
-from lili.envs.influence import POLICIES, SUITE, make_scripted, play
+from lili.envs.influence import HELD, POLICIES, SUITE, make_scripted, play
+from lili.experiments import reproduce
+from lili.experiments.presets import INFLUENCE_ENVS, get_preset
+from lili.report import find_runs
+from lili.runs import final_window
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
@@ -51,50 +59,69 @@ def scripted_returns(env_id: str, interactions: int, last: int, seeds=(0, 1)) ->
     return out
 
 
-def train_run(env_id: str, algo: str, seed: int, interactions: int, out: Path) -> Path:
-    """The one adapter to the agents: a ``lili train`` run (skipped if done, else resumed)."""
-    run = out / env_id.split("/")[-1] / algo / f"seed_{seed}"
-    summary = run / "summary.json"
-    if summary.exists() and json.loads(summary.read_text())["interactions"] >= interactions:
-        return run
-    cmd = [str(Path(sys.executable).parent / "lili"), "train", env_id, "--algo", algo,
-           "--seed", str(seed), "--interactions", str(interactions), "--out", str(out),
-           "--no-progress"] + (["--resume"] if (run / "metrics.csv").exists() else [])
-    print(f"train {algo} seed {seed} on {env_id}", flush=True)
-    subprocess.run(cmd, check=True)
-    return run
+def _score(runs: list, env_id: str) -> dict:
+    """Final return and held share per seed of ``runs`` (one algo on one env)."""
+    finals, held = [], []
+    for run in sorted(runs, key=lambda r: r.seed):
+        k = final_window(run.n_interactions)
+        finals.append(float(np.mean(run.metrics["return"][-k:])))
+        ids = run.metrics["strategy_id"][-k:]
+        held.append(float(np.isin(ids, HELD[env_id]).mean()))
+    n = len(finals)
+    se = float(np.std(finals, ddof=1) / np.sqrt(n)) if n > 1 else 0.0
+    return {"mean": float(np.mean(finals)), "se": se, "per_seed": finals,
+            "held": float(np.mean(held)), "seeds": [r.seed for r in runs],
+            "interactions": min(r.n_interactions for r in runs)}
 
 
-def learned_returns(env_id: str, algos: list[str], seeds: int, interactions: int,
-                    out: Path) -> dict:
-    """Train every (algo, seed) and score the runs' ``metrics.csv``."""
-    results = {}
-    for algo in algos:
-        finals = []
-        for seed in range(seeds):
-            path = train_run(env_id, algo, seed, interactions, out) / "metrics.csv"
-            with path.open() as f:
-                returns = [float(row["return"]) for row in csv.DictReader(f)]
-            tail = max(1, len(returns) // 10)
-            finals.append(float(np.mean(returns[-tail:])))
-        se = float(np.std(finals, ddof=1) / np.sqrt(len(finals))) if len(finals) > 1 else 0.0
-        results[algo] = {"mean": float(np.mean(finals)), "se": se, "per_seed": finals,
-                         "interactions": interactions}
-    return results
+def learned_returns(algos: list[str], seeds: int | None, interactions: int | None, jobs: int,
+                    out: Path, overrides: dict | None = None) -> dict:
+    """Run the ``influence`` preset's ``algos`` (with agent-config ``overrides``) into ``out``
+    and score them: {env: {algo: score}}."""
+    reproduce("influence", out, seeds=seeds, interactions=interactions, jobs=jobs,
+              algos=tuple(algos), overrides=overrides, say=lambda line: None)
+    n = interactions or get_preset("influence").interactions
+    runs = find_runs([out / "influence"], upto=n)
+    scores: dict = {}
+    for env_id in INFLUENCE_ENVS:
+        for algo in algos:
+            mine = [r for r in runs if r.env == env_id and r.algo == algo]
+            if mine:
+                scores.setdefault(env_id, {})[algo] = _score(mine, env_id)
+    return scores
+
+
+def _parse_variant(text: str) -> dict:
+    from lili.config import AgentConfig, yaml_value
+
+    fields = {}
+    for item in text.split(","):
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ValueError(f"--ablate {text!r} is invalid; allowed: FIELD=VALUE[,FIELD=VALUE]")
+        fields[key.strip()] = yaml_value(value)
+    AgentConfig.from_dict(fields)
+    return fields
 
 
 def table(env_id: str, scripted: dict, learned: dict) -> list[str]:
-    lines = [f"### {env_id}", "", "| policy | return / interaction | derived | gap closed |",
-             "|---|---:|---:|---:|"]
+    lines = [f"### {env_id}", "", "| policy | return / interaction | derived | gap closed | "
+             "held | vs no influence |", "|---|---:|---:|---:|---:|---:|"]
     sac = learned.get("sac", {}).get("mean")
     top = scripted["influencer"]["mean"]
+    base = learned.get("lili-no-influence")
     for name, row in scripted.items():
-        lines.append(f"| {LABELS[name]} | {row['mean']:.3f} | {row['known']:.3f} | |")
+        lines.append(f"| {LABELS[name]} | {row['mean']:.3f} | {row['known']:.3f} | | | |")
     for algo, row in learned.items():
         gap = "" if sac is None or top == sac else f"{(row['mean'] - sac) / (top - sac):.2f}"
+        versus = ""
+        if base is not None and not algo.startswith("lili-no-influence") and algo != "sac":
+            se = float(np.hypot(row["se"], base["se"]))
+            diff = row["mean"] - base["mean"]
+            versus = f"{diff:+.3f} ({diff / se:+.1f} s.e.)" if se > 0 else f"{diff:+.3f}"
         lines.append(f"| {LABELS.get(algo, algo)} ({len(row['per_seed'])} seeds, "
                      f"{row['interactions']} int.) | {row['mean']:.3f} ± {row['se']:.3f} | "
-                     f"| {gap} |")
+                     f"| {gap} | {100 * row['held']:.0f}% | {versus} |")
     return lines + [""]
 
 
@@ -103,30 +130,41 @@ def main() -> None:
     p.add_argument("--envs", nargs="+", default=list(SUITE), choices=list(SUITE))
     p.add_argument("--scripted", type=int, default=300, help="interactions per scripted run")
     p.add_argument("--last", type=int, default=200, help="scripted interactions counted")
-    p.add_argument("--algos", nargs="*", default=[], help="learned agents (lili train)")
-    p.add_argument("--interactions", type=int, default=600, help="per learned run")
-    p.add_argument("--seeds", type=int, default=3, help="seeds per learned agent")
+    p.add_argument("--algos", nargs="*", default=[], help="learned agents (the influence preset)")
+    p.add_argument("--ablate", action="append", default=[], metavar="FIELD=VALUE[,...]",
+                   help="a LILI variant with these agent-config fields (repeatable)")
+    p.add_argument("--interactions", type=int, help="per learned run (default: the preset's)")
+    p.add_argument("--seeds", type=int, help="seeds per learned agent (default: the preset's)")
+    p.add_argument("--jobs", type=int, default=2, help="runs at a time")
     p.add_argument("--out", default=str(ROOT / "runs" / "bench_influence"))
     p.add_argument("--name", default="influence", help="results file stem")
     args = p.parse_args()
     if not 1 <= args.last <= args.scripted:
         p.error(f"--last {args.last} is invalid; allowed: 1 to --scripted ({args.scripted})")
-    for flag in ("interactions", "seeds"):
-        if getattr(args, flag) < 1:
-            p.error(f"--{flag} {getattr(args, flag)} is invalid; allowed: an integer >= 1")
-    from lili.agents import ALGOS
-
-    bad = [a for a in args.algos if a not in ALGOS]
+    allowed = get_preset("influence").algos
+    bad = [a for a in args.algos if a not in allowed]
     if bad:
-        p.error(f"--algos {' '.join(bad)} is invalid; allowed: {', '.join(ALGOS)}")
+        p.error(f"--algos {' '.join(bad)} is invalid; allowed: {', '.join(allowed)}")
+    try:
+        variants = {v: _parse_variant(v) for v in args.ablate}
+    except ValueError as e:
+        p.error(str(e))
+    out = Path(args.out)
+    learned: dict = {}
+    if args.algos:
+        learned = learned_returns(args.algos, args.seeds, args.interactions, args.jobs, out)
+    for text, fields in variants.items():
+        scores = learned_returns(["lili"], args.seeds, args.interactions, args.jobs,
+                                 out / "ablate" / text.replace(",", "_"), fields)
+        for env_id, by_algo in scores.items():
+            learned.setdefault(env_id, {})[f"LILI ({text})"] = by_algo["lili"]
     report, lines = {}, []
     for env_id in args.envs:
         scripted = scripted_returns(env_id, args.scripted, args.last)
-        learned = (learned_returns(env_id, args.algos, args.seeds, args.interactions,
-                                   Path(args.out)) if args.algos else {})
-        report[env_id] = {"scripted": scripted, "learned": learned}
-        lines += table(env_id, scripted, learned)
-        print("\n".join(table(env_id, scripted, learned)), flush=True)
+        mine = learned.get(env_id, {})
+        report[env_id] = {"scripted": scripted, "learned": mine}
+        lines += table(env_id, scripted, mine)
+        print("\n".join(table(env_id, scripted, mine)), flush=True)
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / f"{args.name}.json").write_text(json.dumps(report, indent=1))
     (RESULTS / f"{args.name}.md").write_text("\n".join(lines))

@@ -48,6 +48,29 @@ def test_noise_and_history_expand_to_the_paper_tables(tmp_path: Path) -> None:
     assert shared and shared <= pm
 
 
+def test_the_influence_suite_is_a_preset_outside_paper(tmp_path: Path) -> None:
+    specs = plan(get_preset("influence"), tmp_path)
+    assert {s.env for s in specs} == {"lili/InfluenceDrift-v0", "lili/InfluenceSwitch-v0"}
+    assert len(specs) == 2 * 4 * 3 and {s.interactions for s in specs} == {2000}
+    assert "influence" not in PRESETS["paper"].includes
+
+
+def test_set_overrides_every_run_and_is_checked(tmp_path: Path, capsys) -> None:
+    specs = plan(get_preset("influence"), tmp_path, algos=("lili",), quick=True,
+                 overrides={"gamma": 0.999})
+    assert {s.config["gamma"] for s in specs} == {0.999}
+    assert all(s.agent["gamma"] == 0.999 and s.agent["warmup_interactions"] == 2 for s in specs)
+    out = tmp_path / "out"
+    for bad, message in [("gamma=2", "--set: config gamma=2 is invalid; allowed: a number "
+                                     "in [0, 1)"),
+                         ("bogus=1", "--set: unknown config key(s) 'bogus'; allowed: "),
+                         ("gamma", "--set 'gamma' is invalid; allowed: KEY=VALUE")]:
+        assert main(["reproduce", "influence", "--set", bad, "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and message in err[0], err
+    assert not out.exists()
+
+
 def test_paper_counts_each_run_once(tmp_path: Path) -> None:
     specs = plan(get_preset("paper"), tmp_path)
     assert len({s.run_dir for s in specs}) == len(specs) == 3 * (6 + 5 + 5 + 6 + 6 + 6 + 5)

@@ -55,6 +55,9 @@ def test_run_folder_contents(tmp_path, cfg_file):
     summary = json.loads((run / "summary.json").read_text())
     assert summary["interactions"] == 6 and "jax" in summary["versions"]
     assert summary["final_return"] == float(rows[-1]["return"])
+    # CPU-seconds of the training (what lili.experiments.costs estimates from): at least the
+    # compiles, and no more than wall time x the 2 cores' threads could spend (and then some).
+    assert 0.5 < summary["cpu_time_s"] < 8 * summary["wall_time_s"] + 1
     assert list((run / "tb").glob("events.out.tfevents.*"))
     assert (run / "checkpoints" / "latest.json").exists()
 

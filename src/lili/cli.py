@@ -26,7 +26,7 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"lili: error: {message} (see {self.prog} --help)\n")
 
 
-def _parse_kwargs(items: list[str]) -> dict[str, Any]:
+def _parse_kwargs(items: list[str], flag: str = "--env-kwarg") -> dict[str, Any]:
     """``--env-kwarg KEY=VALUE`` items as a dict; VALUE is YAML (0.2, 1e-3, true, [1, 2]).
 
     ``render_mode`` is refused: ``lili train`` renders nothing, and ``lili eval --video`` sets
@@ -39,17 +39,29 @@ def _parse_kwargs(items: list[str]) -> dict[str, Any]:
         key, sep, text = item.partition("=")
         key = key.strip()
         if not sep or not key:
-            raise UsageError(f"--env-kwarg {item!r} is invalid; allowed: KEY=VALUE")
+            raise UsageError(f"{flag} {item!r} is invalid; allowed: KEY=VALUE")
         if key in out:
-            raise UsageError(f"--env-kwarg {key} is given twice ({key}={out[key]!r}, {item}); "
+            raise UsageError(f"{flag} {key} is given twice ({key}={out[key]!r}, {item}); "
                              "allowed: each KEY once")
-        if key == "render_mode":
+        if key == "render_mode" and flag == "--env-kwarg":
             raise UsageError(f"--env-kwarg {item} is not allowed: lili train renders nothing "
                              "(lili eval --video records frames with render_mode='rgb_array')")
         try:
             out[key] = yaml_value(text)
         except ValueError as e:
-            raise UsageError(f"--env-kwarg {item!r} is invalid: {e}") from None
+            raise UsageError(f"{flag} {item!r} is invalid: {e}") from None
+    return out
+
+
+def _parse_overrides(items: list[str]) -> dict[str, Any]:
+    """``lili reproduce --set FIELD=VALUE`` items, checked as AgentConfig fields."""
+    from lili.config import AgentConfig
+
+    out = _parse_kwargs(items, "--set")
+    try:
+        AgentConfig.from_dict(out)
+    except ValueError as e:
+        raise UsageError(f"--set: {e}") from None
     return out
 
 
@@ -219,7 +231,8 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
               seeds=args.seeds, interactions=args.interactions, jobs=args.jobs, ray=args.ray,
               quick=args.quick, dry_run=args.dry_run,
               algos=tuple(args.algos) if args.algos else None,
-              progress=False if args.no_progress else None)
+              progress=False if args.no_progress else None,
+              overrides=_parse_overrides(args.set))
     return 0
 
 
@@ -289,6 +302,9 @@ def build_parser() -> argparse.ArgumentParser:
     x.add_argument("--algos", nargs="+", help="only these algos of the preset")
     x.add_argument("--out", help="folder of every preset's runs (default runs/reproduce, "
                    "runs/reproduce-quick with --quick)")
+    x.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
+                   help="agent-config field for every run, e.g. gamma=0.999 (repeatable; an "
+                        "ablation: give it its own --out)")
     x.add_argument("--dry-run", action="store_true", help="list the runs and the CPU-hours")
     x.add_argument("--no-progress", action="store_true", help="plain lines, no bars")
     x.set_defaults(func=cmd_reproduce)

@@ -305,6 +305,8 @@ class RunLogger:
             "final_return": final_mean(self.returns) if self.returns else None,
             "final_success": final_mean(self.successes) if self.successes else None,
             "wall_time_s": round(stream.wall_time, 2),
+            "cpu_time_s": (round(stream.cpu_time, 2) if np.isfinite(stream.cpu_time)
+                           else None),
             "versions": _versions(),
             "git_commit": _git_commit(),
         }

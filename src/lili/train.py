@@ -98,7 +98,7 @@ def interaction_keys(seed: int, i: int) -> tuple[jax.Array, jax.Array]:
 
 class Stream:
     """The stream of interactions one training run plays: env, replay buffer, action log,
-    the pending first observation of the next interaction, and the wall time so far.
+    the pending first observation of the next interaction, and the wall and CPU time so far.
 
     ``count`` interactions have been played. A fresh stream starts the env's sequence with
     ``reset(seed=seed)``; a restored one (:meth:`load_state_dict`) replays its logged actions
@@ -111,6 +111,10 @@ class Stream:
         self.action_log: list[np.ndarray] = []
         self.pending: tuple[np.ndarray, dict[str, Any]] | None = None
         self.wall_time = 0.0
+        # CPU-seconds of the processes that trained it (all threads); NaN when a checkpoint
+        # from before it was kept resumed the run. Costs are estimated from it, because wall
+        # time depends on what else shares the machine.
+        self.cpu_time = 0.0
 
     @classmethod
     def for_agent(cls, agent: Agent, env: gym.Env) -> Stream:
@@ -164,14 +168,15 @@ class Stream:
         return obs, info
 
     def state_dict(self) -> dict[str, np.ndarray]:
-        """The stream's part of a checkpoint: buffer arrays, action log, wall time."""
+        """The stream's part of a checkpoint: buffer arrays, action log, wall and CPU time."""
         horizon, act_dim = self.buffer.horizon, self.buffer.act_dim
         lengths = np.array([len(a) for a in self.action_log], np.int32)
         acts = np.zeros((len(lengths), horizon, act_dim), np.float32)
         for j, a in enumerate(self.action_log):
             acts[j, : len(a)] = a
         d = {f"buffer.{k}": v for k, v in self.buffer.state_dict().items()}
-        d.update(actions=acts, lengths=lengths, wall_time=np.array(self.wall_time))
+        d.update(actions=acts, lengths=lengths, wall_time=np.array(self.wall_time),
+                 cpu_time=np.array(self.cpu_time))
         return d
 
     def load_state_dict(self, d: dict[str, np.ndarray], source: str = "checkpoint") -> None:
@@ -181,6 +186,7 @@ class Stream:
                                          if k.startswith("buffer.")})
             acts, lengths = d["actions"], d["lengths"]
             wall = float(d["wall_time"])
+            cpu = float(d["cpu_time"]) if "cpu_time" in d else float("nan")
         except (KeyError, ValueError, TypeError) as e:
             raise CheckpointError(f"{source} has a corrupt stream (buffer or action log): {e}") \
                 from None
@@ -190,7 +196,7 @@ class Stream:
                                   f"{self.buffer.count} interactions, its action log "
                                   f"{len(lengths)}")
         self.action_log = [acts[j, :n].copy() for j, n in enumerate(lengths)]
-        self.wall_time = wall
+        self.wall_time, self.cpu_time = wall, cpu
         self.pending = None
 
 
@@ -260,6 +266,7 @@ def train(
     rows: list[dict[str, Any]] = []
     recent: deque[float] = deque(maxlen=20)
     t0 = time.perf_counter() - stream.wall_time
+    c0 = time.process_time() - stream.cpu_time
 
     bar = task = None
     if progress:
@@ -289,6 +296,7 @@ def train(
                 _check_finite(i, done["traj"], obs, metrics)
             acting = agent.next_state(buf)
             stream.wall_time = time.perf_counter() - t0
+            stream.cpu_time = time.process_time() - c0
             row = {
                 "interaction": i,
                 "return": done["ret"],

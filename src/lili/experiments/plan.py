@@ -78,12 +78,14 @@ def _expand_one(preset: Preset, out: Path, seeds: int, interactions: int | None,
 
 def plan(preset: Preset, out: str | Path, seeds: int | None = None,
          interactions: int | None = None, algos: tuple[str, ...] | None = None,
-         quick: bool = False) -> list[RunSpec]:
+         quick: bool = False, overrides: dict[str, Any] | None = None) -> list[RunSpec]:
     """Every run of ``preset`` under ``out``, each once (presets share runs; see presets).
 
     ``quick``: :data:`QUICK_INTERACTIONS` interactions, 1 seed and :data:`QUICK_CONFIG`, unless
-    ``seeds`` / ``interactions`` are given. ``algos`` keeps only those algos. Raises ValueError
-    for a bad value, or when an existing run folder holds another config.
+    ``seeds`` / ``interactions`` are given. ``algos`` keeps only those algos. ``overrides``:
+    agent-config fields set in every run, over the preset's own (``lili reproduce --set``; an
+    ablation, so give it its own ``--out``). Raises ValueError for a bad value, or when an
+    existing run folder holds another config.
     """
     if seeds is not None and (isinstance(seeds, bool) or seeds < 1):
         raise ValueError(f"--seeds {seeds} is invalid; allowed: an integer >= 1")
@@ -103,7 +105,7 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
     for part in parts:
         n_seeds = seeds if seeds is not None else part.seeds
         for spec in _expand_one(part, out, n_seeds, interactions, algos,
-                                QUICK_CONFIG if quick else {}):
+                                {**(QUICK_CONFIG if quick else {}), **(overrides or {})}):
             known = specs.get(spec.run_dir)
             if known is None:
                 specs[spec.run_dir] = spec

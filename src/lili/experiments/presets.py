@@ -127,6 +127,21 @@ def _quickstart() -> Preset:
                   metric="final return and success: mean over the last 10% of interactions")
 
 
+INFLUENCE_ENVS = ("lili/InfluenceDrift-v0", "lili/InfluenceSwitch-v0")
+
+
+def _influence() -> Preset:
+    """The influence suite's learned rows (not part of ``paper``; ``benchmarks/influence.py``
+    sets them beside the scripted optima). H = 4, so 2000 interactions are 8000 updates."""
+    return Preset(name="influence", title="Influence suite: learned agents beside the known "
+                  "optima (docs/influence.md)",
+                  where="not in the paper: envs whose best greedy and influencing returns are "
+                  "known by construction", interactions=2000,
+                  groups=tuple(Group(folder="influence", env=env,
+                                     algos=("sac", "lili-no-influence", "lili", "oracle"))
+                               for env in INFLUENCE_ENVS))
+
+
 def _build() -> dict[str, Preset]:
     presets = [
         _env_preset("point-mass", PM, "Fig. 4 (Sec. 5.2; curves, heatmap of the target over "
@@ -149,6 +164,7 @@ def _build() -> dict[str, Preset]:
                     "block rate and reward per interaction over the last 10% (= the last 100 "
                     "at 1000 interactions); striker's modes over the last 200"),
         _history_text_rule(),
+        _influence(),
         _quickstart(),
     ]
     table = {p.name: p for p in presets}
@@ -162,7 +178,8 @@ def _build() -> dict[str, Preset]:
 
 
 PRESETS: dict[str, Preset] = _build()
-"""Every preset by name; ``paper`` is all of the paper's items (not ``history-text-rule``)."""
+"""Every preset by name; ``paper`` is all of the paper's items (not ``history-text-rule``,
+``influence`` or ``quickstart``)."""
 
 
 def get_preset(name: str) -> Preset:

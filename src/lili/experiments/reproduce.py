@@ -33,8 +33,13 @@ def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: 
     by_preset: dict[str, float] = {}
     for s in todo:
         by_preset[s.preset] = by_preset.get(s.preset, 0.0) + estimate_seconds(s)
+    by_algo: dict[tuple[str, str], float] = {}
+    for s in todo:
+        by_algo[(s.preset, s.algo)] = by_algo.get((s.preset, s.algo), 0.0) + estimate_seconds(s)
     for preset, sec in by_preset.items():
-        say(f"  {preset}: {sec / 3600:.1f} CPU-hours")
+        algos = sorted(((v, a) for (p, a), v in by_algo.items() if p == preset), reverse=True)
+        say(f"  {preset}: {sec / 3600:.1f} CPU-hours ("
+            + ", ".join(f"{a} {v / 3600:.1f}" for v, a in algos) + ")")
     say(f"{name}: {len(specs)} runs ({len(todo)} to run, {len(specs) - len(todo)} done); "
         f"estimated {seconds / 3600:.1f} CPU-hours, about {seconds / 3600 / jobs:.1f} h of "
         f"wall time with {jobs} jobs (from measured per-run costs, lili.experiments.costs)")
@@ -62,11 +67,13 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
               interactions: int | None = None, jobs: int | None = None,
               ray: str | None = None, quick: bool = False, dry_run: bool = False,
               algos: tuple[str, ...] | None = None, progress: bool | None = None,
+              overrides: dict[str, Any] | None = None,
               say: Callable[[str], None] = print) -> dict[str, Any]:
     """Run preset ``name`` into ``out`` and write ``out/<name>/report/``; see the module doc.
 
     ``ray``: None (local processes), ``"local"`` (start Ray on this machine) or a cluster
-    address. Every value is checked and every existing run folder compared with the run it
+    address. ``overrides``: agent-config fields set in every run (:func:`plan`). Every value
+    is checked and every existing run folder compared with the run it
     would become before anything is written; a bad one raises ValueError naming it. Runs that
     fail are listed (with their logs) in a ValueError after the others have finished.
     """
@@ -75,7 +82,8 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
         raise ValueError(f"--jobs {jobs} is invalid; allowed: an integer >= 1")
     out = Path(out)
     check_out_dir(out)
-    specs = plan(preset, out, seeds=seeds, interactions=interactions, algos=algos, quick=quick)
+    specs = plan(preset, out, seeds=seeds, interactions=interactions, algos=algos, quick=quick,
+                 overrides=overrides)
     status = {s: run_status(s) for s in specs}
     if dry_run:
         return _dry_run(name, specs, status, jobs or LOCAL_JOBS, say)

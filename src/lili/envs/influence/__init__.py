@@ -24,7 +24,7 @@ from lili.envs.influence.drift import InfluenceDriftEnv
 from lili.envs.influence.scripted import Rollout, ScriptedPolicy, play
 from lili.envs.influence.switch import InfluenceSwitchEnv
 
-__all__ = ["SUITE", "POLICIES", "InfluenceDriftEnv", "InfluenceSwitchEnv", "Rollout",
+__all__ = ["SUITE", "POLICIES", "HELD", "InfluenceDriftEnv", "InfluenceSwitchEnv", "Rollout",
            "ScriptedPolicy", "play"]
 
 POLICIES = ("no-information", "greedy", "influencer")
@@ -33,6 +33,15 @@ SUITE: dict[str, tuple[dict[str, Callable[[int], ScriptedPolicy]], dict[str, flo
     "lili/InfluenceDrift-v0": (drift.SCRIPTED, drift.KNOWN_RETURNS),
     "lili/InfluenceSwitch-v0": (switch.SCRIPTED, switch.KNOWN_RETURNS),
     "lili/PointMass-v0": (point_mass.SCRIPTED, point_mass.KNOWN_RETURNS),
+}
+
+
+# The strategy ids the scripted influencer holds the partner at in the long run (the greedy
+# policy drives Drift to its walls, ids 0 and 7, and cycles Switch through all three modes):
+# the share of interactions spent there is the behavioural evidence of influence.
+HELD: dict[str, tuple[int, ...]] = {
+    "lili/InfluenceDrift-v0": (3, 4),  # g = -0.125, +0.125
+    "lili/InfluenceSwitch-v0": (switch.MIDDLE,),
 }
 
 
