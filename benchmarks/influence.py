@@ -12,9 +12,10 @@ interactions (Point Mass: 3000 and 2000, because its greedy target random-walks 
 seeds 0-1, beside the value derived in each env's docstring. Learned rows are the runs of the
 ``influence`` preset of ``lili reproduce`` (2000 interactions, 3 seeds by default; finished
 runs are skipped, killed ones resumed; ``--jobs`` at a time) under ``--out``; an ablation
-``FIELD=VALUE[,FIELD=VALUE]`` is the preset's LILI runs with those agent-config fields
-(``lili reproduce influence --algos lili --set ...``) under ``--out``/ablate/<variant>. Each
-seed scores the mean return over the last 10% of its interactions (mean +- s.e. over seeds).
+``FIELD=VALUE[,FIELD=VALUE]`` is the preset's LILI runs (or ``--ablate-algos``') with those
+agent-config fields (``lili reproduce influence --algos lili --set ...``) under
+``--out``/ablate/<variant>. Each seed scores the mean return over the last 10% of its
+interactions (mean +- s.e. over seeds).
 Gap closed = (R - R_SAC) / (R_influencer - R_SAC); "held" = the share of those interactions
 in which the partner was at a strategy the scripted influencer holds it at
 (:data:`lili.envs.influence.HELD`), the behavioural evidence of influence; "vs no influence" =
@@ -115,7 +116,8 @@ def table(env_id: str, scripted: dict, learned: dict) -> list[str]:
     for algo, row in learned.items():
         gap = "" if sac is None or top == sac else f"{(row['mean'] - sac) / (top - sac):.2f}"
         versus = ""
-        if base is not None and not algo.startswith("lili-no-influence") and algo != "sac":
+        if base is not None and "no-influence" not in algo and "no influence" not in algo \
+                and algo != "sac":
             se = float(np.hypot(row["se"], base["se"]))
             diff = row["mean"] - base["mean"]
             versus = f"{diff:+.3f} ({diff / se:+.1f} s.e.)" if se > 0 else f"{diff:+.3f}"
@@ -133,6 +135,8 @@ def main() -> None:
     p.add_argument("--algos", nargs="*", default=[], help="learned agents (the influence preset)")
     p.add_argument("--ablate", action="append", default=[], metavar="FIELD=VALUE[,...]",
                    help="a LILI variant with these agent-config fields (repeatable)")
+    p.add_argument("--ablate-algos", nargs="+", default=["lili"],
+                   help="the agents each --ablate variant trains (default lili)")
     p.add_argument("--interactions", type=int, help="per learned run (default: the preset's)")
     p.add_argument("--seeds", type=int, help="seeds per learned agent (default: the preset's)")
     p.add_argument("--jobs", type=int, default=2, help="runs at a time")
@@ -142,7 +146,7 @@ def main() -> None:
     if not 1 <= args.last <= args.scripted:
         p.error(f"--last {args.last} is invalid; allowed: 1 to --scripted ({args.scripted})")
     allowed = get_preset("influence").algos
-    bad = [a for a in args.algos if a not in allowed]
+    bad = [a for a in args.algos + args.ablate_algos if a not in allowed]
     if bad:
         p.error(f"--algos {' '.join(bad)} is invalid; allowed: {', '.join(allowed)}")
     try:
@@ -154,10 +158,11 @@ def main() -> None:
     if args.algos:
         learned = learned_returns(args.algos, args.seeds, args.interactions, args.jobs, out)
     for text, fields in variants.items():
-        scores = learned_returns(["lili"], args.seeds, args.interactions, args.jobs,
+        scores = learned_returns(args.ablate_algos, args.seeds, args.interactions, args.jobs,
                                  out / "ablate" / text.replace(",", "_"), fields)
         for env_id, by_algo in scores.items():
-            learned.setdefault(env_id, {})[f"LILI ({text})"] = by_algo["lili"]
+            for algo, score in by_algo.items():
+                learned.setdefault(env_id, {})[f"{LABELS[algo]} ({text})"] = score
     report, lines = {}, []
     for env_id in args.envs:
         scripted = scripted_returns(env_id, args.scripted, args.last)
