@@ -28,8 +28,55 @@ __all__ = ["COSTS", "WARM", "cost_key", "estimate_seconds", "measure"]
 
 WARM = 30
 
-# benchmarks/costs.py --preset paper --timed 30 (see benchmarks/results/costs.md).
+# python benchmarks/costs.py --preset paper --timed 10 --jobs 2 (benchmarks/results/costs.md),
+# 2026-12-01, two keys side by side on the 2-core machine. Check against full runs: Point Mass
+# LILI 0.722 s here, 0.70-0.73 s per interaction of wall time in the 2000-interaction runs that
+# ran two at a time (benchmarks/results/runs/s9/point-mass).
 COSTS: dict[tuple[str, str, int], tuple[float, float]] = {
+    ("lili/PointMass-v0", "sac", 1): (17.6, 0.4941),
+    ("lili/PointMass-v0", "slac", 1): (64.0, 1.2963),
+    ("lili/PointMass-v0", "lilac", 1): (35.3, 0.9376),
+    ("lili/PointMass-v0", "lili-no-influence", 1): (26.0, 0.6585),
+    ("lili/PointMass-v0", "lili", 1): (26.9, 0.7219),
+    ("lili/PointMass-v0", "oracle", 1): (19.9, 0.5220),
+    ("lili/PointMass-v0", "lili", 3): (34.0, 0.8607),
+    ("lili/PointMass-v0", "lili", 5): (32.3, 1.0844),
+    ("lili/PointMass-v0", "lili", 7): (34.7, 1.1694),
+    ("lili/PointMass-v0", "lili", 9): (35.0, 1.4931),
+    ("lili/PointMass-v0", "lili", 11): (39.5, 1.7192),
+    ("lili/Driving2D-v0", "sac", 1): (14.6, 0.0941),
+    ("lili/Driving2D-v0", "slac", 1): (54.9, 0.2813),
+    ("lili/Driving2D-v0", "lilac", 1): (27.4, 0.2259),
+    ("lili/Driving2D-v0", "lili-no-influence", 1): (20.4, 0.1507),
+    ("lili/Driving2D-v0", "lili", 1): (23.4, 0.1588),
+    ("lili/Driving2D-v0", "oracle", 1): (14.9, 0.0895),
+    ("lili/DrivingSteer-v0", "sac", 1): (15.1, 0.1855),
+    ("lili/DrivingSteer-v0", "slac", 1): (57.0, 0.5530),
+    ("lili/DrivingSteer-v0", "lilac", 1): (32.2, 0.4136),
+    ("lili/DrivingSteer-v0", "lili-no-influence", 1): (24.5, 0.2959),
+    ("lili/DrivingSteer-v0", "lili", 1): (25.2, 0.3537),
+    ("lili/DrivingSteer-v0", "oracle", 1): (16.0, 0.1859),
+    ("lili/LunarLander-v0", "sac", 1): (20.1, 0.5863),
+    ("lili/LunarLander-v0", "slac", 1): (77.9, 1.6456),
+    ("lili/LunarLander-v0", "lilac", 1): (44.2, 1.2375),
+    ("lili/LunarLander-v0", "lili-no-influence", 1): (29.4, 0.9335),
+    ("lili/LunarLander-v0", "lili", 1): (33.5, 0.9115),
+    ("lili/LunarLander-v0", "oracle", 1): (21.5, 0.6582),
+    ("lili/AirHockey-v0", "random", 1): (9.0, 0.0054),
+    ("lili/AirHockey-v0", "sac", 1): (18.2, 0.3088),
+    ("lili/AirHockey-v0", "lili-no-influence", 1): (27.6, 0.4125),
+    ("lili/AirHockey-v0", "lili", 1): (27.5, 0.4670),
+    ("lili/AirHockey-v0", "oracle", 1): (18.4, 0.2904),
+    # Influence suite (not in paper): the cpu_time_s of the committed 2000-interaction runs
+    # (benchmarks/results/runs/s10/influence), two runs side by side; fixed part not split out.
+    ("lili/InfluenceDrift-v0", "sac", 1): (20.0, 0.046),
+    ("lili/InfluenceDrift-v0", "lili-no-influence", 1): (20.0, 0.064),
+    ("lili/InfluenceDrift-v0", "lili", 1): (20.0, 0.067),
+    ("lili/InfluenceDrift-v0", "oracle", 1): (20.0, 0.047),
+    ("lili/InfluenceSwitch-v0", "sac", 1): (20.0, 0.047),
+    ("lili/InfluenceSwitch-v0", "lili-no-influence", 1): (20.0, 0.066),
+    ("lili/InfluenceSwitch-v0", "lili", 1): (20.0, 0.067),
+    ("lili/InfluenceSwitch-v0", "oracle", 1): (20.0, 0.046),
 }
 
 
