@@ -32,10 +32,12 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
+from lili.cli import parse_overrides
 from lili.envs.influence import HELD, POLICIES, SUITE, make_scripted, play
 from lili.experiments import reproduce
 from lili.experiments.presets import INFLUENCE_ENVS, get_preset
 from lili.report import find_runs
+from lili.report.stats import final_performance, mean_se
 from lili.runs import final_window
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -62,16 +64,13 @@ def scripted_returns(env_id: str, interactions: int, last: int, seeds=(0, 1)) ->
 
 def _score(runs: list, env_id: str) -> dict:
     """Final return and held share per seed of ``runs`` (one algo on one env)."""
-    finals, held = [], []
-    for run in sorted(runs, key=lambda r: r.seed):
-        k = final_window(run.n_interactions)
-        finals.append(float(np.mean(run.metrics["return"][-k:])))
-        ids = run.metrics["strategy_id"][-k:]
-        held.append(float(np.isin(ids, HELD[env_id]).mean()))
-    n = len(finals)
-    se = float(np.std(finals, ddof=1) / np.sqrt(n)) if n > 1 else 0.0
-    return {"mean": float(np.mean(finals)), "se": se, "per_seed": finals,
-            "held": float(np.mean(held)), "seeds": [r.seed for r in runs],
+    runs = sorted(runs, key=lambda r: r.seed)
+    finals = [final_performance(r) for r in runs]
+    held = [float(np.isin(r.metrics["strategy_id"][-final_window(r.n_interactions):],
+                          HELD[env_id]).mean()) for r in runs]
+    mean, se = mean_se(finals)
+    return {"mean": mean, "se": se, "per_seed": finals, "held": float(np.mean(held)),
+            "seeds": [r.seed for r in runs],
             "interactions": min(r.n_interactions for r in runs)}
 
 
@@ -90,19 +89,6 @@ def learned_returns(algos: list[str], seeds: int | None, interactions: int | Non
             if mine:
                 scores.setdefault(env_id, {})[algo] = _score(mine, env_id)
     return scores
-
-
-def _parse_variant(text: str) -> dict:
-    from lili.config import AgentConfig, yaml_value
-
-    fields = {}
-    for item in text.split(","):
-        key, sep, value = item.partition("=")
-        if not sep or not key.strip():
-            raise ValueError(f"--ablate {text!r} is invalid; allowed: FIELD=VALUE[,FIELD=VALUE]")
-        fields[key.strip()] = yaml_value(value)
-    AgentConfig.from_dict(fields)
-    return fields
 
 
 def table(env_id: str, scripted: dict, learned: dict) -> list[str]:
@@ -150,7 +136,7 @@ def main() -> None:
     if bad:
         p.error(f"--algos {' '.join(bad)} is invalid; allowed: {', '.join(allowed)}")
     try:
-        variants = {v: _parse_variant(v) for v in args.ablate}
+        variants = {v: parse_overrides(v.split(","), "--ablate") for v in args.ablate}
     except ValueError as e:
         p.error(str(e))
     out = Path(args.out)

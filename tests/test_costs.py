@@ -47,7 +47,9 @@ def test_measure_prefers_cpu_time_and_marks_wall_time(tmp_path: Path) -> None:
                                     {"cpu_time_s": None, "wall_time_s": 300.0}]):
         run = tmp_path / f"seed_{seed}"
         run.mkdir()
-        (run / "config.yaml").write_text(yaml.safe_dump({"agent": {"history": 3}}))
+        (run / "config.yaml").write_text(yaml.safe_dump(
+            {"env": "e", "env_kwargs": {"history": 3}, "algo": "lili", "seed": seed,
+             "interactions": 100, "agent": {"history": 3}}))
         (run / "summary.json").write_text(json.dumps(
             {"env": "e", "algo": "lili", "interactions": 100, **summary}))
     rate, wall = costs.measure(tmp_path)[("e", "lili", 3)]

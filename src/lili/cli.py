@@ -53,15 +53,16 @@ def _parse_kwargs(items: list[str], flag: str = "--env-kwarg") -> dict[str, Any]
     return out
 
 
-def _parse_overrides(items: list[str]) -> dict[str, Any]:
-    """``lili reproduce --set FIELD=VALUE`` items, checked as AgentConfig fields."""
+def parse_overrides(items: list[str], flag: str = "--set") -> dict[str, Any]:
+    """``FIELD=VALUE`` items (``lili reproduce --set``) as a dict of AgentConfig fields;
+    UsageError naming ``flag`` and the bad item or field."""
     from lili.config import AgentConfig
 
-    out = _parse_kwargs(items, "--set")
+    out = _parse_kwargs(items, flag)
     try:
         AgentConfig.from_dict(out)
     except ValueError as e:
-        raise UsageError(f"--set: {e}") from None
+        raise UsageError(f"{flag}: {e}") from None
     return out
 
 
@@ -232,7 +233,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
               quick=args.quick, dry_run=args.dry_run,
               algos=tuple(args.algos) if args.algos else None,
               progress=False if args.no_progress else None,
-              overrides=_parse_overrides(args.set))
+              overrides=parse_overrides(args.set))
     return 0
 
 

@@ -23,6 +23,7 @@ from collections import defaultdict
 from pathlib import Path
 
 from lili.experiments.plan import RunSpec
+from lili.runs import read_run_config
 
 __all__ = ["COSTS", "WARM", "cost_key", "estimate_seconds", "measure"]
 
@@ -112,13 +113,7 @@ def measure(root: str | Path) -> dict[tuple[str, str, int], tuple[float, bool]]:
         s = json.loads(path.read_text())
         if not s.get("interactions"):
             continue
-        try:
-            import yaml
-
-            history = int(yaml.safe_load((path.parent / "config.yaml").read_text())
-                          ["agent"].get("history", 1))
-        except Exception:
-            history = 1
+        history = int(read_run_config(path.parent)["agent"].get("history", 1))
         cpu = s.get("cpu_time_s")
         seconds, wall = (cpu, False) if cpu is not None else (s["wall_time_s"], True)
         rates[(s["env"], s["algo"], history)].append((seconds / s["interactions"], wall))

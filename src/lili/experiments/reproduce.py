@@ -24,18 +24,19 @@ RAY_LOCAL = "local"
 def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: int,
              say: Callable[[str], None]) -> dict[str, Any]:
     todo = [s for s in specs if status[s] != "done"]
-    seconds = sum(estimate_seconds(s, rows_logged(s) if status[s] == "resume" else 0)
-                  for s in todo)
+    estimates = {s: estimate_seconds(s, rows_logged(s) if status[s] == "resume" else 0)
+                 for s in todo}
+    seconds = sum(estimates.values())
     for s in specs:
         say(f"{status[s]:6}  {s.run_dir}  ({s.interactions} interactions"
             + (f", {s.env_kwargs}" if s.env_kwargs else "")
             + (f", config {s.config}" if s.config else "") + ")")
-    by_preset: dict[str, float] = {}
-    for s in todo:
-        by_preset[s.preset] = by_preset.get(s.preset, 0.0) + estimate_seconds(s)
     by_algo: dict[tuple[str, str], float] = {}
-    for s in todo:
-        by_algo[(s.preset, s.algo)] = by_algo.get((s.preset, s.algo), 0.0) + estimate_seconds(s)
+    for s, sec in estimates.items():
+        by_algo[(s.preset, s.algo)] = by_algo.get((s.preset, s.algo), 0.0) + sec
+    by_preset: dict[str, float] = {}
+    for (preset, _), sec in by_algo.items():
+        by_preset[preset] = by_preset.get(preset, 0.0) + sec
     for preset, sec in by_preset.items():
         algos = sorted(((v, a) for (p, a), v in by_algo.items() if p == preset), reverse=True)
         say(f"  {preset}: {sec / 3600:.1f} CPU-hours ("
