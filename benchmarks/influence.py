@@ -8,7 +8,8 @@ influencer, and (with ``--ablate``) LILI variants, one changed option each.
         --ablate gamma=0.999 --ablate updates_per_step=4     # + one LILI row per variant
 
 Scripted rows: the mean return per interaction over the last ``--last`` of ``--scripted``
-interactions (Point Mass: 3000 and 2000, because its greedy target random-walks slowly),
+interactions (Point Mass and Drift: 3000 and 2000, because Point Mass's greedy target
+random-walks slowly and Drift's partner returns at random),
 seeds 0-1, beside the value derived in each env's docstring. Learned rows are the runs of the
 ``influence`` preset of ``lili reproduce`` (2000 interactions, 3 seeds by default; finished
 runs are skipped, killed ones resumed; ``--jobs`` at a time) under ``--out``; an ablation
@@ -42,8 +43,9 @@ from lili.runs import final_window
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
-# Point Mass's greedy target takes a slow random walk round the circle: average it out.
-SCRIPTED_BUDGET = {"lili/PointMass-v0": (3000, 2000)}
+# Point Mass's greedy target takes a slow random walk round the circle, and Drift's partner
+# returns at random about every 20 interactions: average them out.
+SCRIPTED_BUDGET = {"lili/PointMass-v0": (3000, 2000), "lili/InfluenceDrift-v0": (3000, 2000)}
 LABELS = {"no-information": "scripted: no information", "greedy": "scripted: greedy",
           "influencer": "scripted: influencer", "sac": "SAC", "oracle": "Oracle",
           "lili": "LILI", "lili-no-influence": "LILI (no influence)"}
@@ -74,16 +76,20 @@ def _score(runs: list, env_id: str) -> dict:
             "interactions": min(r.n_interactions for r in runs)}
 
 
-def learned_returns(algos: list[str], seeds: int | None, interactions: int | None, jobs: int,
-                    out: Path, overrides: dict | None = None) -> dict:
-    """Run the ``influence`` preset's ``algos`` (with agent-config ``overrides``) into ``out``
-    and score them: {env: {algo: score}}."""
+def learned_returns(algos: list[str], envs: list[str], seeds: int | None,
+                    interactions: int | None, jobs: int, out: Path,
+                    overrides: dict | None = None) -> dict:
+    """Run the ``influence`` preset's ``algos`` on ``envs`` (with agent-config ``overrides``)
+    into ``out`` and score them: {env: {algo: score}}."""
+    envs = [e for e in envs if e in INFLUENCE_ENVS]
+    if not envs:
+        return {}
     reproduce("influence", out, seeds=seeds, interactions=interactions, jobs=jobs,
-              algos=tuple(algos), overrides=overrides, say=lambda line: None)
+              algos=tuple(algos), envs=tuple(envs), overrides=overrides, say=lambda line: None)
     n = interactions or get_preset("influence").interactions
     runs = find_runs([out / "influence"], upto=n)
     scores: dict = {}
-    for env_id in INFLUENCE_ENVS:
+    for env_id in envs:
         for algo in algos:
             mine = [r for r in runs if r.env == env_id and r.algo == algo]
             if mine:
@@ -142,10 +148,11 @@ def main() -> None:
     out = Path(args.out)
     learned: dict = {}
     if args.algos:
-        learned = learned_returns(args.algos, args.seeds, args.interactions, args.jobs, out)
+        learned = learned_returns(args.algos, args.envs, args.seeds, args.interactions, args.jobs,
+                                  out)
     for text, fields in variants.items():
-        scores = learned_returns(args.ablate_algos, args.seeds, args.interactions, args.jobs,
-                                 out / "ablate" / text.replace(",", "_"), fields)
+        scores = learned_returns(args.ablate_algos, args.envs, args.seeds, args.interactions,
+                                 args.jobs, out / "ablate" / text.replace(",", "_"), fields)
         for env_id, by_algo in scores.items():
             for algo, score in by_algo.items():
                 learned.setdefault(env_id, {})[f"{LABELS[algo]} ({text})"] = score

@@ -53,6 +53,15 @@ def test_the_influence_suite_is_a_preset_outside_paper(tmp_path: Path) -> None:
     assert {s.env for s in specs} == {"lili/InfluenceDrift-v0", "lili/InfluenceSwitch-v0"}
     assert len(specs) == 2 * 4 * 3 and {s.interactions for s in specs} == {2000}
     assert "influence" not in PRESETS["paper"].includes
+    # Drift's version is written into every run's config (its default changed once).
+    assert {s.env: s.env_kwargs for s in specs}["lili/InfluenceDrift-v0"] == {"returns": 0.05}
+
+
+def test_envs_keeps_only_those_envs_by_id_or_alias(tmp_path: Path) -> None:
+    drift = plan(get_preset("influence"), tmp_path, envs=("influence-drift",))
+    assert {s.env for s in drift} == {"lili/InfluenceDrift-v0"} and len(drift) == 4 * 3
+    paper = plan(get_preset("paper"), tmp_path, envs=("lili/AirHockey-v0",), algos=("sac",))
+    assert [(s.env, s.algo) for s in paper] == [("lili/AirHockey-v0", "sac")] * 3
 
 
 def test_set_overrides_every_run_and_is_checked(tmp_path: Path, capsys) -> None:
@@ -115,6 +124,9 @@ def _snapshot(root: Path) -> dict[str, bytes]:
     (["point-mass", "--seeds", "0"], "--seeds 0 is invalid"),
     (["point-mass", "--interactions", "-1"], "--interactions -1 is invalid"),
     (["air-hockey", "--algos", "slac"], "--algos slac is not in preset 'air-hockey'; allowed"),
+    (["influence", "--envs", "point-mass"], "--envs point-mass is not in preset 'influence'; "
+     "allowed: lili/InfluenceDrift-v0, lili/InfluenceSwitch-v0"),
+    (["influence", "--envs", "nowhere"], "unknown env 'nowhere'; allowed:"),
 ])
 def test_bad_input_is_one_clear_error(tmp_path: Path, capsys, argv, message) -> None:
     assert main(["reproduce", *argv, "--out", str(tmp_path / "out")]) == 2

@@ -232,6 +232,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
               seeds=args.seeds, interactions=args.interactions, jobs=args.jobs, ray=args.ray,
               quick=args.quick, dry_run=args.dry_run,
               algos=tuple(args.algos) if args.algos else None,
+              envs=tuple(args.envs) if args.envs else None,
               progress=False if args.no_progress else None,
               overrides=parse_overrides(args.set))
     return 0
@@ -301,6 +302,7 @@ def build_parser() -> argparse.ArgumentParser:
     x.add_argument("--quick", action="store_true",
                    help="tiny budget, 1 seed: the whole pipeline in minutes")
     x.add_argument("--algos", nargs="+", help="only these algos of the preset")
+    x.add_argument("--envs", nargs="+", help="only these envs of the preset (ids or aliases)")
     x.add_argument("--out", help="folder of every preset's runs (default runs/reproduce, "
                    "runs/reproduce-quick with --quick)")
     x.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",

@@ -15,6 +15,7 @@ from typing import Any
 import yaml
 
 from lili.config import AgentConfig
+from lili.envs.core import resolve_env_id
 from lili.experiments.presets import PRESETS, Preset
 from lili.runs import run_dir_for
 
@@ -60,11 +61,14 @@ class RunSpec:
 
 
 def _expand_one(preset: Preset, out: Path, seeds: int, interactions: int | None,
-                algos: tuple[str, ...] | None, extra_config: dict[str, Any]) -> list[RunSpec]:
+                algos: tuple[str, ...] | None, envs: tuple[str, ...] | None,
+                extra_config: dict[str, Any]) -> list[RunSpec]:
     budget = interactions if interactions is not None else preset.interactions
     specs = []
     for seed in range(seeds):
         for group in preset.groups:
+            if envs is not None and group.env not in envs:
+                continue
             for algo in group.algos:
                 if algos is not None and algo not in algos:
                     continue
@@ -78,11 +82,13 @@ def _expand_one(preset: Preset, out: Path, seeds: int, interactions: int | None,
 
 def plan(preset: Preset, out: str | Path, seeds: int | None = None,
          interactions: int | None = None, algos: tuple[str, ...] | None = None,
-         quick: bool = False, overrides: dict[str, Any] | None = None) -> list[RunSpec]:
+         quick: bool = False, overrides: dict[str, Any] | None = None,
+         envs: tuple[str, ...] | None = None) -> list[RunSpec]:
     """Every run of ``preset`` under ``out``, each once (presets share runs; see presets).
 
     ``quick``: :data:`QUICK_INTERACTIONS` interactions, 1 seed and :data:`QUICK_CONFIG`, unless
-    ``seeds`` / ``interactions`` are given. ``algos`` keeps only those algos. ``overrides``:
+    ``seeds`` / ``interactions`` are given. ``algos`` keeps only those algos, ``envs`` only
+    those envs (registered ids or aliases, e.g. ``influence-drift``). ``overrides``:
     agent-config fields set in every run, over the preset's own (``lili reproduce --set``; an
     ablation, so give it its own ``--out``). Raises ValueError for a bad value, or when an
     existing run folder holds another config.
@@ -96,15 +102,23 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
         if unknown:
             raise ValueError(f"--algos {' '.join(unknown)} is not in preset {preset.name!r}; "
                              f"allowed: {', '.join(preset.algos)}")
+    parts = [PRESETS[n] for n in preset.includes] or [preset]
+    if envs is not None:
+        asked = envs
+        envs = tuple(resolve_env_id(e) for e in asked)
+        offered = tuple(dict.fromkeys(e for part in parts for e in part.envs))
+        unknown = [a for a, e in zip(asked, envs) if e not in offered]
+        if unknown:
+            raise ValueError(f"--envs {' '.join(unknown)} is not in preset {preset.name!r}; "
+                             f"allowed: {', '.join(offered)}")
     out = Path(out)
     if quick:
         seeds = 1 if seeds is None else seeds
         interactions = QUICK_INTERACTIONS if interactions is None else interactions
-    parts = [PRESETS[n] for n in preset.includes] or [preset]
     specs: dict[Path, RunSpec] = {}
     for part in parts:
         n_seeds = seeds if seeds is not None else part.seeds
-        for spec in _expand_one(part, out, n_seeds, interactions, algos,
+        for spec in _expand_one(part, out, n_seeds, interactions, algos, envs,
                                 {**(QUICK_CONFIG if quick else {}), **(overrides or {})}):
             known = specs.get(spec.run_dir)
             if known is None:

@@ -64,6 +64,11 @@ class Preset:
         """Every algo any group of this preset runs, in first-seen order."""
         return tuple(dict.fromkeys(a for g in self.groups for a in g.algos))
 
+    @property
+    def envs(self) -> tuple[str, ...]:
+        """Every env id any group of this preset runs on, in first-seen order."""
+        return tuple(dict.fromkeys(g.env for g in self.groups))
+
 
 def _env_preset(name: str, env: str, where: str, interactions: int, algos: tuple[str, ...],
                 title: str, metric: str | None = None) -> Preset:
@@ -128,6 +133,9 @@ def _quickstart() -> Preset:
 
 
 INFLUENCE_ENVS = ("lili/InfluenceDrift-v0", "lili/InfluenceSwitch-v0")
+# Written out although it is the default, so that a run's config.yaml says which Drift it met:
+# runs of the first version (returns=0) then count as another config, not as finished runs.
+INFLUENCE_KWARGS: dict[str, dict[str, Any]] = {"lili/InfluenceDrift-v0": {"returns": 0.05}}
 
 
 def _influence() -> Preset:
@@ -138,7 +146,8 @@ def _influence() -> Preset:
                   where="not in the paper: envs whose best greedy and influencing returns are "
                   "known by construction", interactions=2000,
                   groups=tuple(Group(folder="influence", env=env,
-                                     algos=("sac", "lili-no-influence", "lili", "oracle"))
+                                     algos=("sac", "lili-no-influence", "lili", "oracle"),
+                                     env_kwargs=INFLUENCE_KWARGS.get(env, {}))
                                for env in INFLUENCE_ENVS))
 
 

@@ -68,12 +68,13 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
               interactions: int | None = None, jobs: int | None = None,
               ray: str | None = None, quick: bool = False, dry_run: bool = False,
               algos: tuple[str, ...] | None = None, progress: bool | None = None,
-              overrides: dict[str, Any] | None = None,
+              overrides: dict[str, Any] | None = None, envs: tuple[str, ...] | None = None,
               say: Callable[[str], None] = print) -> dict[str, Any]:
     """Run preset ``name`` into ``out`` and write ``out/<name>/report/``; see the module doc.
 
     ``ray``: None (local processes), ``"local"`` (start Ray on this machine) or a cluster
-    address. ``overrides``: agent-config fields set in every run (:func:`plan`). Every value
+    address. ``overrides``: agent-config fields set in every run, ``algos`` / ``envs``: only
+    those of the preset (:func:`plan`). Every value
     is checked and every existing run folder compared with the run it
     would become before anything is written; a bad one raises ValueError naming it. Runs that
     fail are listed (with their logs) in a ValueError after the others have finished.
@@ -84,7 +85,7 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     out = Path(out)
     check_out_dir(out)
     specs = plan(preset, out, seeds=seeds, interactions=interactions, algos=algos, quick=quick,
-                 overrides=overrides)
+                 overrides=overrides, envs=envs)
     status = {s: run_status(s) for s in specs}
     if dry_run:
         return _dry_run(name, specs, status, jobs or LOCAL_JOBS, say)
