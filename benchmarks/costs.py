@@ -5,7 +5,8 @@
 
 For every distinct cost key of the preset's runs (env, algo, and the encoder's history, the one
 config field that changes the work per interaction; noise levels do not), one child process with
-one XLA thread, as ``lili reproduce`` starts runs, builds the env and the agent the way
+one XLA thread, as ``lili reproduce`` starts runs, builds the first planned run of that key (its
+own env kwargs and agent config, so the benchmark cannot drift from the presets) the way
 ``lili train`` does, plays the warm-up and 10 learning interactions (imports, env, JAX compiles,
 SLAC's pretraining: the fixed part), then ``--timed`` more. It reports the CPU-seconds of the
 whole process (``time.process_time``, every thread), so the figures do not depend on what else
@@ -34,17 +35,16 @@ RESULTS = Path(__file__).resolve().parent / "results"
 WARM = 30  # interactions before the timed part: the default warm-up (20) and 10 learning ones
 
 
-def measure_one(env_id: str, algo: str, history: int, timed: int) -> dict[str, float]:
-    """In this process: CPU-seconds of the fixed part and per learning interaction."""
+def measure_one(run: dict, timed: int) -> dict[str, float]:
+    """In this process: CPU-seconds of the fixed part and per learning interaction of ``run``
+    (a planned run's ``env``, ``algo``, ``env_kwargs`` and ``config``)."""
     from lili.agents import make_agent
     from lili.config import AgentConfig
     from lili.envs.checker import load_env_class
     from lili.train import Stream, train
 
-    kwargs = {"history": history} if history > 1 else {}
-    config = AgentConfig.from_dict({"history": history} if history > 1 else {})
-    env = load_env_class(env_id)(**kwargs)
-    agent = make_agent(algo, env, config, 0)
+    env = load_env_class(run["env"])(**run["env_kwargs"])
+    agent = make_agent(run["algo"], env, AgentConfig.from_dict(run["config"]), 0)
     stream = Stream.for_agent(agent, agent.env)
     train(agent, stream, WARM)
     fixed = time.process_time()
@@ -53,14 +53,18 @@ def measure_one(env_id: str, algo: str, history: int, timed: int) -> dict[str, f
     return {"fixed_s": round(fixed, 2), "per_interaction_s": round(per, 4)}
 
 
-def cost_keys(preset: str) -> list[tuple[str, str, int]]:
-    """The distinct (env, algo, history) of the preset's runs, in plan order."""
+def cost_keys(preset: str) -> dict[tuple[str, str, int], dict]:
+    """The distinct (env, algo, history) of the preset's runs, in plan order, each with the
+    first planned run that has it (as :func:`measure_one` takes it)."""
     from lili.experiments.costs import cost_key
     from lili.experiments.plan import plan
     from lili.experiments.presets import get_preset
 
-    specs = plan(get_preset(preset), "/nonexistent-costs-plan")
-    return list(dict.fromkeys(cost_key(s) for s in specs))
+    keys: dict[tuple[str, str, int], dict] = {}
+    for spec in plan(get_preset(preset), "/nonexistent-costs-plan"):
+        keys.setdefault(cost_key(spec), {"env": spec.env, "algo": spec.algo,
+                                         "env_kwargs": spec.env_kwargs, "config": spec.config})
+    return keys
 
 
 def main() -> None:
@@ -68,16 +72,15 @@ def main() -> None:
     ap.add_argument("--preset", default="paper")
     ap.add_argument("--timed", type=int, default=30, help="timed interactions per key")
     ap.add_argument("--jobs", type=int, default=2, help="keys measured side by side")
-    ap.add_argument("--only", nargs=3, metavar=("ENV", "ALGO", "HISTORY"),
-                    help="measure one key in this process and print its JSON (internal)")
+    ap.add_argument("--only", metavar="RUN_JSON",
+                    help="measure one planned run in this process and print its JSON (internal)")
     args = ap.parse_args()
     if args.timed < 1:
         ap.error(f"--timed {args.timed} is invalid; allowed: an integer >= 1")
     if args.jobs < 1:
         ap.error(f"--jobs {args.jobs} is invalid; allowed: an integer >= 1")
     if args.only:
-        env_id, algo, history = args.only
-        print(json.dumps(measure_one(env_id, algo, int(history), args.timed)))
+        print(json.dumps(measure_one(json.loads(args.only), args.timed)))
         return
 
     from lili.experiments.runner import child_env
@@ -86,7 +89,7 @@ def main() -> None:
 
     def run(key: tuple[str, str, int]) -> dict:
         env_id, algo, history = key
-        out = subprocess.run([sys.executable, __file__, "--only", env_id, algo, str(history),
+        out = subprocess.run([sys.executable, __file__, "--only", json.dumps(keys[key]),
                               "--timed", str(args.timed)], env=child_env(), text=True,
                              capture_output=True, cwd=os.getcwd())
         if out.returncode != 0:
