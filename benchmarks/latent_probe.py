@@ -1,0 +1,75 @@
+"""What a trained agent's latent knows of its partner: a linear probe z^i -> strategy on the
+influence suite (issue 14's diagnosis of why LILI stops at the greedy response in Drift).
+
+    python benchmarks/latent_probe.py RUN [RUN ...] [--interactions 1500]
+
+Each run's newest checkpoint plays ``--interactions`` interactions of its own env (the run's
+env kwargs, env seed 11) with deterministic actions, the latent updated after every
+interaction as in training. A least-squares fit of the partner's true strategy (``info
+["strategy"][0]``: Drift's goal g) on z^i over the first 70% scores R^2 on the rest; the table
+also gives the return per interaction, how often the interaction ended across 0 from g (what
+the influencer does every time, the greedy response never) and the mean |x_end - g|. Prints
+a table and writes ``benchmarks/results/<--name>.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from lili.envs.checker import load_env_class
+from lili.play.policy import Blocker, agent_file_for_run, interaction_steps
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def probe(run: str, n: int) -> dict:
+    """Probe one run (see the module docstring)."""
+    path, cfg = agent_file_for_run(run)
+    env = load_env_class(cfg["env"])(**cfg.get("env_kwargs", {}))
+    game = Blocker.load(path, env).new_game()
+    zs, goals, ends, returns = [], [], [], []
+    obs, info = env.reset(seed=11)
+    for _ in range(n):
+        zs.append(game.latent.copy())
+        goals.append(float(info["strategy"][0]))
+        returns.append(sum(r for _t, r, _d, _i in interaction_steps(env, game, obs)))
+        ends.append(float(getattr(env.unwrapped, "x", np.nan)))
+        obs, info = env.reset()
+        game.end_interaction(obs)
+    z, g, end = np.asarray(zs), np.asarray(goals), np.asarray(ends)
+    x = np.c_[z, np.ones(n)]
+    k = int(0.7 * n)
+    w, *_ = np.linalg.lstsq(x[:k], g[:k], rcond=None)
+    r2 = 1.0 - float(np.mean((x[k:] @ w - g[k:]) ** 2) / np.var(g[k:]))
+    return {"run": run, "algo": cfg["algo"], "interactions_trained": int(cfg["interactions"]),
+            "probe_r2": r2, "return": float(np.mean(returns)),
+            "ends_across": float(np.mean(np.sign(end) != np.sign(g))),
+            "end_error": float(np.mean(np.abs(end - g)))}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("runs", nargs="+", help="run folders")
+    ap.add_argument("--interactions", type=int, default=1500)
+    ap.add_argument("--name", default="latent_probe", help="results file stem")
+    args = ap.parse_args()
+    if args.interactions < 10:
+        ap.error(f"--interactions {args.interactions} is invalid; allowed: an integer >= 10")
+    rows = [probe(r, args.interactions) for r in args.runs]
+    lines = ["| run | algo | trained | probe R^2 (z -> g) | return | ends across 0 from g | "
+             "mean abs(x_end - g) |", "|---|---|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        lines.append(f"| {r['run']} | {r['algo']} | {r['interactions_trained']} | "
+                     f"{r['probe_r2']:.2f} | {r['return']:.3f} | {r['ends_across']:.2f} | "
+                     f"{r['end_error']:.3f} |")
+    print("\n".join(lines))
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / f"{args.name}.json").write_text(json.dumps(rows, indent=1))
+
+
+if __name__ == "__main__":
+    main()
