@@ -7,8 +7,9 @@ Each run's newest checkpoint plays ``--interactions`` interactions of its own en
 env kwargs, env seed 11) with deterministic actions, the latent updated after every
 interaction as in training. A least-squares fit of the partner's true strategy (``info
 ["strategy"][0]``: Drift's goal g) on z^i over the first 70% scores R^2 on the rest; the table
-also gives the return per interaction, how often the interaction ended across 0 from g (what
-the influencer does every time, the greedy response never) and the mean |x_end - g|. Prints
+also gives the return per interaction, how often the interaction ended across 0 from g (in
+Drift what the influencer does every time, the greedy response never) and the mean
+|x_end - g|. No R^2 ("nan") when the partner never changed strategy in the held-out part. Prints
 a table and writes ``benchmarks/results/<--name>.json``.
 """
 
@@ -44,7 +45,10 @@ def probe(run: str, n: int) -> dict:
     x = np.c_[z, np.ones(n)]
     k = int(0.7 * n)
     w, *_ = np.linalg.lstsq(x[:k], g[:k], rcond=None)
-    r2 = 1.0 - float(np.mean((x[k:] @ w - g[k:]) ** 2) / np.var(g[k:]))
+    # A partner held at one strategy (Switch's LILI keeps it in the middle) leaves nothing to
+    # explain: no R^2 then.
+    var = float(np.var(g[k:]))
+    r2 = 1.0 - float(np.mean((x[k:] @ w - g[k:]) ** 2)) / var if var > 1e-12 else float("nan")
     return {"run": run, "algo": cfg["algo"], "interactions_trained": int(cfg["interactions"]),
             "probe_r2": r2, "return": float(np.mean(returns)),
             "ends_across": float(np.mean(np.sign(end) != np.sign(g))),

@@ -2,8 +2,8 @@
 policies are known by construction, with those policies scripted next to each env.
 
 - ``lili/InfluenceDrift-v0`` (:mod:`.drift`): a goal that drifts toward the side where the ego
-  ended. Knowing the goal is worth nothing in the long run; holding it near the start is worth
-  0.2 per interaction.
+  ended and returns near the start 5% of the time. Knowing the goal is worth 0.32 per
+  interaction, holding it near the start 0.15 more.
 - ``lili/InfluenceSwitch-v0`` (:mod:`.switch`): the partner's next mode is a known function of
   its mode and of the direction of the ego's last action. Knowing the mode is worth 1.05,
   steering it to the cheap mode 0.45 more.
@@ -37,7 +37,8 @@ SUITE: dict[str, tuple[dict[str, Callable[[int], ScriptedPolicy]], dict[str, flo
 
 
 # The strategy ids the scripted influencer holds the partner at in the long run (the greedy
-# policy drives Drift to its walls, ids 0 and 7, and cycles Switch through all three modes):
+# policy drives Drift to its walls, ids 0 and 7, between returns, and cycles Switch through all
+# three modes):
 # the share of interactions spent there is the behavioural evidence of influence.
 HELD: dict[str, tuple[int, ...]] = {
     "lili/InfluenceDrift-v0": (3, 4),  # g = -0.125, +0.125
