@@ -107,7 +107,7 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
         asked = envs
         envs = tuple(resolve_env_id(e) for e in asked)
         offered = tuple(dict.fromkeys(e for part in parts for e in part.envs))
-        unknown = [a for a, e in zip(asked, envs) if e not in offered]
+        unknown = [a for a, e in zip(asked, envs, strict=True) if e not in offered]
         if unknown:
             raise ValueError(f"--envs {' '.join(unknown)} is not in preset {preset.name!r}; "
                              f"allowed: {', '.join(offered)}")
