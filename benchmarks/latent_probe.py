@@ -5,12 +5,12 @@ influence suite (issue 14's diagnosis of why LILI stops at the greedy response i
 
 Each run's newest checkpoint plays ``--interactions`` interactions of its own env (the run's
 env kwargs, env seed 11) with deterministic actions, the latent updated after every
-interaction as in training. A least-squares fit of the partner's true strategy (``info
-["strategy"][0]``: Drift's goal g) on z^i over the first 70% scores R^2 on the rest; the table
-also gives the return per interaction, how often the interaction ended across 0 from g (in
-Drift what the influencer does every time, the greedy response never) and the mean
-|x_end - g|. No R^2 ("nan") when the partner never changed strategy in the held-out part. Prints
-a table and writes ``benchmarks/results/<--name>.json``.
+interaction as in training (:class:`lili.evaluate.Episodes`). A least-squares fit of the
+partner's true strategy (``info["strategy"][0]``: Drift's goal g) on z^i over the first 70%
+scores R^2 on the rest; the table also gives the return per interaction, how often the
+interaction ended across 0 from g (in Drift what the influencer does every time, the greedy
+response never) and the mean |x_end - g|. No R^2 ("nan") when the partner never changed
+strategy in the held-out part. Prints a table and writes ``benchmarks/results/<--name>.json``.
 """
 
 from __future__ import annotations
@@ -21,8 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
+from lili.agents import load_agent
 from lili.envs.checker import load_env_class
-from lili.play.policy import Blocker, agent_file_for_run, interaction_steps
+from lili.evaluate import Episodes
+from lili.play.policy import agent_file_for_run
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
@@ -31,16 +33,14 @@ def probe(run: str, n: int) -> dict:
     """Probe one run (see the module docstring)."""
     path, cfg = agent_file_for_run(run)
     env = load_env_class(cfg["env"])(**cfg.get("env_kwargs", {}))
-    game = Blocker.load(path, env).new_game()
+    episodes = Episodes(load_agent(path, env), env, seed=11)
     zs, goals, ends, returns = [], [], [], []
-    obs, info = env.reset(seed=11)
     for _ in range(n):
-        zs.append(game.latent.copy())
-        goals.append(float(info["strategy"][0]))
-        returns.append(sum(r for _t, r, _d, _i in interaction_steps(env, game, obs)))
-        ends.append(float(getattr(env.unwrapped, "x", np.nan)))
-        obs, info = env.reset()
-        game.end_interaction(obs)
+        zs.append(np.asarray(episodes.acting.z, np.float32))
+        goals.append(float(episodes.info["strategy"][0]))
+        done = episodes.play()
+        returns.append(float(done["ret"]))
+        ends.append(float(done["traj"]["next_obs"][-1][0]))  # the line envs observe [x]
     z, g, end = np.asarray(zs), np.asarray(goals), np.asarray(ends)
     x = np.c_[z, np.ones(n)]
     k = int(0.7 * n)

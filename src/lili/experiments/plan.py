@@ -103,11 +103,11 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
             raise ValueError(f"--algos {' '.join(unknown)} is not in preset {preset.name!r}; "
                              f"allowed: {', '.join(preset.algos)}")
     parts = [PRESETS[n] for n in preset.includes] or [preset]
-    if envs is not None:
-        asked = envs
-        envs = tuple(resolve_env_id(e) for e in asked)
+    env_ids = None if envs is None else tuple(resolve_env_id(e) for e in envs)
+    if env_ids is not None:
         offered = tuple(dict.fromkeys(e for part in parts for e in part.envs))
-        unknown = [a for a, e in zip(asked, envs, strict=True) if e not in offered]
+        # Name the value as given (an alias stays an alias in the message).
+        unknown = [a for a, e in zip(envs, env_ids, strict=True) if e not in offered]
         if unknown:
             raise ValueError(f"--envs {' '.join(unknown)} is not in preset {preset.name!r}; "
                              f"allowed: {', '.join(offered)}")
@@ -118,7 +118,7 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
     specs: dict[Path, RunSpec] = {}
     for part in parts:
         n_seeds = seeds if seeds is not None else part.seeds
-        for spec in _expand_one(part, out, n_seeds, interactions, algos, envs,
+        for spec in _expand_one(part, out, n_seeds, interactions, algos, env_ids,
                                 {**(QUICK_CONFIG if quick else {}), **(overrides or {})}):
             known = specs.get(spec.run_dir)
             if known is None:

@@ -90,8 +90,8 @@ class DriftPartner:
 
     def update(self, outcome: int, rng: np.random.Generator) -> None:
         """``outcome`` is the side of 0 where the ego ended: -1 left, +1 right."""
-        # One uniform draw per update whatever the branch, so that the partner's stream does
-        # not depend on the ego's actions.
+        # The draws depend only on the partner's own generator, never on ``outcome``, so the
+        # ego's actions cannot shift the partner's later randomness.
         if rng.random() < self.returns:
             self.index = NEAR_START[int(rng.integers(2))]
         else:
