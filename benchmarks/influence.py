@@ -34,7 +34,7 @@ import gymnasium as gym
 import numpy as np
 
 from lili.cli import parse_overrides
-from lili.envs.influence import HELD, POLICIES, SUITE, make_scripted, play
+from lili.envs.influence import HELD, SUITE, make_scripted, play
 from lili.experiments import reproduce
 from lili.experiments.presets import INFLUENCE_ENVS, get_preset
 from lili.report import find_runs
@@ -55,11 +55,11 @@ def scripted_returns(env_id: str, interactions: int, last: int, seeds=(0, 1)) ->
     """Mean return over the last ``last`` interactions, per scripted policy (mean over seeds)."""
     interactions, last = SCRIPTED_BUDGET.get(env_id, (interactions, last))
     out = {}
-    for name in POLICIES:
+    for name in SUITE[env_id][0]:
         per_seed = [play(gym.make(env_id), make_scripted(env_id, name, s), interactions, s)
                     .last(last).mean_return() for s in seeds]
         out[name] = {"mean": float(np.mean(per_seed)), "per_seed": per_seed,
-                     "known": SUITE[env_id][1][name], "interactions": interactions,
+                     "known": SUITE[env_id][1].get(name), "interactions": interactions,
                      "last": last}
     return out
 
@@ -104,7 +104,9 @@ def table(env_id: str, scripted: dict, learned: dict) -> list[str]:
     top = scripted["influencer"]["mean"]
     base = learned.get("lili-no-influence")
     for name, row in scripted.items():
-        lines.append(f"| {LABELS[name]} | {row['mean']:.3f} | {row['known']:.3f} | | | |")
+        known = "" if row["known"] is None else f"{row['known']:.3f}"
+        lines.append(f"| {LABELS.get(name, 'scripted: ' + name)} | {row['mean']:.3f} | {known} "
+                     "| | | |")
     for algo, row in learned.items():
         gap = "" if sac is None or top == sac else f"{(row['mean'] - sac) / (top - sac):.2f}"
         versus = ""

@@ -47,6 +47,23 @@ def test_drift_scripted_policies_meet_their_derived_returns() -> None:
     assert r["greedy"] >= r["no-information"] + 0.25
 
 
+def test_drift_policies_that_read_only_the_last_interaction_lose_the_returns_and_no_more() -> None:
+    env_id = "lili/InfluenceDrift-v0"
+    told = _returns(env_id, 3000, 2900)
+    last = {name: play(gym.make(env_id), make_scripted(env_id, f"{name} (last interaction)", 0),
+                       3000, 0).last(2900).mean_return() for name in ("greedy", "influencer")}
+    # Missing a return costs; the drift itself is fully predicted (without returns they are
+    # the told policies from the second interaction on).
+    assert last["greedy"] == pytest.approx(-0.47, abs=0.02)
+    assert last["influencer"] == pytest.approx(-0.20, abs=0.01)
+    assert told["influencer"] > last["influencer"] > last["greedy"] + 0.25
+    assert told["greedy"] > last["greedy"] > told["no-information"]
+    for name in ("greedy", "influencer"):
+        first = play(gym.make(env_id, returns=0.0),
+                     make_scripted(env_id, f"{name} (last interaction)", 0), 60, 0)
+        assert first.last(50).mean_return() == pytest.approx(known_returns(0.0)[name], abs=1e-6)
+
+
 def test_drift_without_returns_is_the_first_version_where_only_influence_pays() -> None:
     assert known_returns(0.0) == {"no-information": -0.375, "greedy": -0.375,
                                   "influencer": -0.175}
@@ -168,5 +185,6 @@ def test_bad_kwargs(cls, kwargs, match) -> None:
 def test_make_scripted_rejects_unknown_names() -> None:
     with pytest.raises(ValueError, match="'lili/Nope-v0'.*allowed: lili/InfluenceDrift-v0"):
         make_scripted("lili/Nope-v0", "greedy")
-    with pytest.raises(ValueError, match="'smart'.*allowed: no-information, greedy, influencer"):
+    allowed = r"allowed: no-information, greedy, influencer, greedy \(last interaction\)"
+    with pytest.raises(ValueError, match=f"'smart' for lili/InfluenceDrift-v0.*{allowed}"):
         make_scripted("lili/InfluenceDrift-v0", "smart")

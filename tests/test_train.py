@@ -10,9 +10,9 @@ import yaml
 
 import lili.envs  # noqa: F401
 from lili import cli
-from lili.agents import LILI, SAC
+from lili.agents import LILI, SAC, Oracle
 from lili.config import AgentConfig
-from lili.evaluate import evaluate
+from lili.evaluate import Episodes, evaluate
 from lili.runs import RunLogger
 from lili.train import Stream, train
 
@@ -102,6 +102,16 @@ def test_evaluate_reports_per_interaction_metrics():
     assert res["strategy_ids"][0] in (0, 1)
     with pytest.raises(ValueError, match="n_interactions=0"):
         evaluate(agent, n_interactions=0)
+
+
+def test_episodes_give_the_oracle_the_strategy_it_trained_with():
+    # A bare env handed to the step-by-step driver must be wrapped as in training: the Oracle
+    # acting on observations without the strategy gave wrong actions and no error.
+    agent = Oracle(gym.make("lili/InfluenceDrift-v0"), AgentConfig.from_dict(FAST))
+    bare = Episodes(agent, gym.make("lili/InfluenceDrift-v0"), seed=3)
+    assert bare.obs.shape == (agent.obs_dim,)
+    played = [float(bare.play()["ret"]) for _ in range(3)]
+    assert played == evaluate(agent, gym.make("lili/InfluenceDrift-v0"), 3, seed=3)["returns"]
 
 
 @pytest.mark.slow  # 4-5 CPU-minutes; tests/test_readme.py keeps a learning test in the suite

@@ -20,7 +20,9 @@ class Episodes:
 
     The acting state is carried exactly as in training: z^1 from ``initial_state()``, then
     after each interaction ``next_state`` of a small buffer holding the last N + 1
-    interactions, and within an interaction the state each step returns. Used by
+    interactions, and within an interaction the state each step returns. The agent's own
+    observation wrapper is applied to ``env`` (the Oracle's, which appends the partner's
+    strategy; without it an Oracle would act on observations it never trained on). Used by
     :func:`evaluate` and by step-by-step drivers (the play page, videos).
     """
 
@@ -28,11 +30,11 @@ class Episodes:
                  key_seed: int | None = None) -> None:
         """``seed`` starts the env's sequence; ``key_seed`` (default ``seed``) the actions'
         noise when ``deterministic`` is False."""
-        self.agent, self.env, self.deterministic = agent, env, deterministic
+        self.agent, self.env, self.deterministic = agent, agent._wrap(env), deterministic
         self.buffer = InteractionBuffer(max(2, agent.history + 1), agent.horizon, agent.obs_dim,
                                         agent.act_dim)
         self.key = jax.random.PRNGKey(seed if key_seed is None else key_seed)
-        self.obs, self.info = env.reset(seed=seed)
+        self.obs, self.info = self.env.reset(seed=seed)
         self.acting = agent.initial_state()
         self.index = 0
 
@@ -75,7 +77,7 @@ def evaluate(
     if isinstance(n_interactions, bool) or not isinstance(n_interactions, (int, np.integer)) \
             or n_interactions < 1:
         raise ValueError(f"n_interactions={n_interactions!r} is invalid; allowed: an integer >= 1")
-    env = agent.env if env is None else agent._wrap(env)
+    env = agent.env if env is None else env
     episodes = Episodes(agent, env, agent.seed if seed is None else check_seed(seed),
                         deterministic, key_seed=0 if seed is None else seed)
     on_step = None if frames is None else (lambda o, t: frames.append(env.render()))

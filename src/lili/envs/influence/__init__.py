@@ -3,7 +3,8 @@ policies are known by construction, with those policies scripted next to each en
 
 - ``lili/InfluenceDrift-v0`` (:mod:`.drift`): a goal that drifts toward the side where the ego
   ended and returns near the start 5% of the time. Knowing the goal is worth 0.32 per
-  interaction, holding it near the start 0.15 more.
+  interaction, holding it near the start 0.15 more; to an agent that infers the goal from the
+  last interaction, as LILI does, 0.18 and 0.27.
 - ``lili/InfluenceSwitch-v0`` (:mod:`.switch`): the partner's next mode is a known function of
   its mode and of the direction of the ego's last action. Knowing the mode is worth 1.05,
   steering it to the cheap mode 0.45 more.
@@ -47,12 +48,16 @@ HELD: dict[str, tuple[int, ...]] = {
 
 
 def make_scripted(env_id: str, name: str, seed: int = 0) -> Any:
-    """The scripted policy ``name`` (one of :data:`POLICIES`) of the suite's env ``env_id``."""
+    """The scripted policy ``name`` of the suite's env ``env_id``: one of :data:`POLICIES`,
+    which every env has, or one of the env's own further references (Drift's "... (last
+    interaction)" policies, see :func:`lili.envs.influence.drift.from_last_interaction`)."""
     if env_id not in SUITE:
         raise ValueError(f"env {env_id!r} has no scripted policies; allowed: {', '.join(SUITE)}")
-    if name not in POLICIES:
-        raise ValueError(f"unknown scripted policy {name!r}; allowed: {', '.join(POLICIES)}")
-    return SUITE[env_id][0][name](seed)
+    policies = SUITE[env_id][0]
+    if name not in policies:
+        raise ValueError(f"unknown scripted policy {name!r} for {env_id}; allowed: "
+                         f"{', '.join(policies)}")
+    return policies[name](seed)
 
 
 __all__ += ["make_scripted"]

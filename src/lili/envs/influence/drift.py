@@ -45,6 +45,17 @@ k = m on.
   never leaves), so only the states next to the start decide it, and those are the states
   "held" counts (:data:`lili.envs.influence.HELD`). Greedy spends about p of its
   interactions there, the influencer all of them.
+
+What the last interaction allows. The greedy and influencing policies above are *told* g^i, as
+the Oracle is. An agent that infers g^i from interaction i-1 (LILI's encoder reads only that)
+can know the drift but not a return, which nothing before it shows, so after each return it
+acts on the wrong goal once. Scripted with exactly that knowledge
+(:func:`from_last_interaction`), measured by ``benchmarks/influence.py`` (not derived): greedy
+**-0.47**, influencer **-0.20**. Greedy loses most (after a wrong guess it runs the full
+distance the wrong way, and a return it misses leaves g drifting out again), the influencer
+little (a return lands on +-0.125, where it holds g anyway, half the time on the side it
+predicted). So influence is worth about 0.27 to such an agent, and the influencer told g lies
+only 0.025 above what it can reach.
 """
 
 from __future__ import annotations
@@ -57,7 +68,7 @@ from gymnasium import spaces
 from lili.envs.influence.line import LineEnv, check_horizon, check_probability, move_to
 
 __all__ = ["InfluenceDriftEnv", "DriftPartner", "GOALS", "NEAR_START", "RETURNS", "SCRIPTED",
-           "KNOWN_RETURNS", "known_returns", "renewal_return"]
+           "KNOWN_RETURNS", "known_returns", "renewal_return", "from_last_interaction"]
 
 GOALS = np.array([-0.875, -0.625, -0.375, -0.125, 0.125, 0.375, 0.625, 0.875])
 NEAR_START = (3, 4)  # the ids of g = -0.125, +0.125, where a returning partner goes
@@ -137,9 +148,40 @@ def influencer(obs: np.ndarray, info: dict[str, Any], horizon: int = 4) -> np.nd
     return move_to(float(obs[0]), float(np.clip(g, end - reach, end + reach)), SPEED)
 
 
-# name -> factory(seed) -> policy(obs, info) (these three are deterministic: seed unused)
+def from_last_interaction(told: Any) -> Any:
+    """``told`` (a policy told g) handed instead the g that the last interaction predicts:
+    the last g moved one step toward the side where the ego ended, i.e. everything that
+    interaction reveals (its rewards give g, its last state the side), but not a return of
+    the partner, which nothing before it shows. Before any interaction it plays
+    :func:`no_information`. The best that any agent inferring g^i from tau^{i-1} (LILI, whose
+    encoder reads only the last interaction) can hope to do with ``told``'s strategy.
+    Stateful: one instance per rollout."""
+    memory: dict[str, float | None] = {"g": None, "end": 0.0, "predicted": None}
+
+    def policy(obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        if info["t"] == 0 and memory["g"] is not None:
+            index = int(np.argmin(np.abs(GOALS - memory["g"])))
+            step = 1 if memory["end"] >= 0 else -1
+            memory["predicted"] = float(GOALS[int(np.clip(index + step, 0, len(GOALS) - 1))])
+        # Within the interaction its rewards reveal this g; it is only used after it ends.
+        memory["g"] = float(info["strategy"][0])
+        if memory["predicted"] is None:
+            action = no_information(obs, info)
+        else:
+            action = told(obs, {**info, "strategy": np.array([memory["predicted"]], np.float32)})
+        memory["end"] = float(np.clip(obs[0] + SPEED * action[0], -1.0, 1.0))
+        return action
+
+    return policy
+
+
+# name -> factory(seed) -> policy(obs, info) (deterministic: seed unused). The first three are
+# the suite's (:data:`lili.envs.influence.POLICIES`); the last two are the reachable bounds of
+# an agent that infers g from the last interaction (:func:`from_last_interaction`).
 SCRIPTED = {"no-information": lambda seed: no_information, "greedy": lambda seed: greedy,
-            "influencer": lambda seed: influencer}
+            "influencer": lambda seed: influencer,
+            "greedy (last interaction)": lambda seed: from_last_interaction(greedy),
+            "influencer (last interaction)": lambda seed: from_last_interaction(influencer)}
 
 
 def renewal_return(costs: list[float], tail: float, p: float) -> float:
