@@ -48,6 +48,7 @@ RESULTS = ROOT / "benchmarks" / "results"
 SCRIPTED_BUDGET = {"lili/PointMass-v0": (3000, 2000), "lili/InfluenceDrift-v0": (3000, 2000)}
 LABELS = {"no-information": "scripted: no information", "greedy": "scripted: greedy",
           "influencer": "scripted: influencer", "sac": "SAC", "oracle": "Oracle",
+          "oracle-last": "Oracle (last interaction)",
           "lili": "LILI", "lili-no-influence": "LILI (no influence)"}
 
 

@@ -14,6 +14,7 @@ from lili.envs import OracleObservation
 from lili.envs.checker import check_env
 from lili.envs.driving2d import Driving2DEnv
 from lili.envs.point_mass import CirclePartner, PointMassEnv
+from lili.envs.wrappers import LastInteractionObservation
 
 ENV_IDS = ["lili/PointMass-v0", "lili/Driving2D-v0"]
 CENTER = np.array([0.0, -0.05])
@@ -305,3 +306,30 @@ def test_driving_history_follows_majority_of_last_three() -> None:
         run_interaction(env, lane_policy(side))
         _, info = env.reset()
         assert info["strategy_id"] == sid
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_last_interaction_observation_appends_how_the_last_interaction_went(env_id: str) -> None:
+    env = LastInteractionObservation(gym.make(env_id))
+    inner = env.env.observation_space.shape[0]
+    strat = env.unwrapped.strategy_space.shape[0]
+    act = env.action_space.shape[0]
+    assert env.observation_space.shape == (2 * inner + strat + act,)
+    seen = []
+    for seed in (1, None, None, 2):
+        obs, info = env.reset(seed=seed) if seed is not None else env.reset()
+        appended = obs[inner:]
+        if seed is not None:  # a new sequence: nothing came before it
+            np.testing.assert_array_equal(appended, 0.0)
+        else:
+            last = seen[-1]
+            np.testing.assert_allclose(appended, np.concatenate(
+                [last["strategy"], last["obs"], last["act"]]), rtol=1e-6)
+        strategy, done = info["strategy"], False
+        while not done:
+            a = env.action_space.sample()
+            obs, _, terminated, truncated, info = env.step(a)
+            done = terminated or truncated
+            assert obs in env.observation_space
+            np.testing.assert_array_equal(obs[inner:], appended)  # fixed within the interaction
+        seen.append({"strategy": strategy, "obs": obs[:inner], "act": a})

@@ -51,7 +51,8 @@ def test_noise_and_history_expand_to_the_paper_tables(tmp_path: Path) -> None:
 def test_the_influence_suite_is_a_preset_outside_paper(tmp_path: Path) -> None:
     specs = plan(get_preset("influence"), tmp_path)
     assert {s.env for s in specs} == {"lili/InfluenceDrift-v0", "lili/InfluenceSwitch-v0"}
-    assert len(specs) == 2 * 4 * 3 and {s.interactions for s in specs} == {2000}
+    assert len(specs) == 2 * 5 * 3 and {s.interactions for s in specs} == {2000}
+    assert {s.algo for s in specs} == {"sac", "lili-no-influence", "lili", "oracle", "oracle-last"}
     assert "influence" not in PRESETS["paper"].includes
     # Drift's version is written into every run's config (its default changed once).
     assert {s.env: s.env_kwargs for s in specs}["lili/InfluenceDrift-v0"] == {"returns": 0.05}
@@ -59,7 +60,7 @@ def test_the_influence_suite_is_a_preset_outside_paper(tmp_path: Path) -> None:
 
 def test_envs_keeps_only_those_envs_by_id_or_alias(tmp_path: Path) -> None:
     drift = plan(get_preset("influence"), tmp_path, envs=("influence-drift",))
-    assert {s.env for s in drift} == {"lili/InfluenceDrift-v0"} and len(drift) == 4 * 3
+    assert {s.env for s in drift} == {"lili/InfluenceDrift-v0"} and len(drift) == 5 * 3
     paper = plan(get_preset("paper"), tmp_path, envs=("lili/AirHockey-v0",), algos=("sac",))
     assert [(s.env, s.algo) for s in paper] == [("lili/AirHockey-v0", "sac")] * 3
 

@@ -19,6 +19,7 @@ __all__ = ["SAC", "Oracle", "LILI", "LILAC", "ALGOS", "make_agent", "load_agent"
 
 LatentState = ActingState  # the name of earlier releases
 
-ALGOS = ("sac", "oracle", "lili", "lili-no-influence", "lilac", "slac", "random")
+ALGOS = ("sac", "oracle", "lili", "lili-no-influence", "lilac", "slac", "random",
+         "oracle-last")
 """Every algo name (``lili train --algo``), in the order reports list them."""
 assert set(ALGOS) == set(AGENTS), "every agent module registers its algo names"

@@ -707,5 +707,24 @@ class Oracle(SAC):
         return env if isinstance(env, OracleObservation) else OracleObservation(env)
 
 
+class LastInteractionOracle(Oracle):
+    """SAC on :class:`~lili.envs.wrappers.LastInteractionObservation`: told the partner's
+    strategy in the *last* interaction and how that interaction ended, not the current
+    strategy. A diagnostic, not a paper baseline: it is what LILI's encoder (which reads only
+    the last interaction) could at best tell LILI's policy, so LILI below it falls short in its
+    latent or in learning to use it, and it below the Oracle means the last interaction does
+    not determine the partner's next strategy.
+    """
+
+    algo = "oracle-last"
+
+    def _wrap(self, env: gym.Env) -> gym.Env:
+        from lili.envs.wrappers import LastInteractionObservation
+
+        return env if isinstance(env, LastInteractionObservation) \
+            else LastInteractionObservation(env)
+
+
 register("sac", SAC)
 register("oracle", Oracle)
+register("oracle-last", LastInteractionOracle)

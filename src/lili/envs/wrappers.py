@@ -8,7 +8,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-__all__ = ["OracleObservation"]
+__all__ = ["OracleObservation", "LastInteractionObservation"]
 
 
 class OracleObservation(gym.ObservationWrapper):
@@ -54,3 +54,69 @@ class OracleObservation(gym.ObservationWrapper):
 
     def observation(self, observation: np.ndarray) -> np.ndarray:
         return np.concatenate([np.asarray(observation, dtype=np.float32), self._strategy])
+
+
+class LastInteractionObservation(gym.Wrapper):
+    """Append what a perfect encoder of the last interaction could report: the partner's
+    strategy during it (``info["strategy"]``) and how it ended (its last observation and last
+    action); zeros before the first interaction of a sequence.
+
+    SAC on this wrapper is the "Oracle (last interaction)": told everything about tau^{i-1}
+    that the partner's next move depends on in the suite's envs, and nothing about interaction
+    i itself. It bounds from above what LILI, whose encoder reads only tau^{i-1}, can get from
+    its latent; where it falls short of the Oracle, the partner's next strategy is not
+    determined by the last interaction (Drift's random returns).
+    """
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        inner = env.unwrapped
+        strat = getattr(inner, "strategy_space", None)
+        if not isinstance(strat, spaces.Box) or len(strat.shape) != 1:
+            raise ValueError(
+                f"the last-interaction Oracle needs the partner's true strategy, and env "
+                f"{type(inner).__name__} has no flat Box `strategy_space` (got {strat!r}); "
+                "allowed: an env that defines strategy_space and info['strategy']"
+            )
+        obs_space, act_space = env.observation_space, env.action_space
+        for name, space in (("observation", obs_space), ("action", act_space)):
+            if not isinstance(space, spaces.Box) or len(space.shape) != 1:
+                raise ValueError(f"LastInteractionObservation needs a flat Box {name} space; "
+                                 f"got {space}")
+        parts = (obs_space, strat, obs_space, act_space)
+        self.observation_space = spaces.Box(
+            np.concatenate([p.low for p in parts]).astype(np.float32),
+            np.concatenate([p.high for p in parts]).astype(np.float32), dtype=np.float32)
+        self._sizes = (strat.shape[0], obs_space.shape[0], act_space.shape[0])
+        self._clear()
+
+    def _clear(self) -> None:
+        self._last = np.zeros(sum(self._sizes), np.float32)
+        self._strategy = np.zeros(self._sizes[0], np.float32)
+        self._obs = np.zeros(self._sizes[1], np.float32)
+        self._act = np.zeros(self._sizes[2], np.float32)
+        self._started = False
+
+    def reset(self, **kwargs: Any):
+        obs, info = self.env.reset(**kwargs)
+        if "strategy" not in info:
+            raise ValueError(f"the last-interaction Oracle needs info['strategy'] from reset(); "
+                             f"env {type(self.env.unwrapped).__name__} gave keys {sorted(info)}")
+        if kwargs.get("seed") is not None or not self._started:
+            # A seeded reset starts a new sequence: nothing came before it.
+            self._clear()
+        else:
+            self._last = np.concatenate([self._strategy, self._obs, self._act])
+        self._started = True
+        self._strategy = np.asarray(info["strategy"], np.float32)
+        self._obs = np.asarray(obs, np.float32)
+        return self._observation(obs), info
+
+    def step(self, action: Any):
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        self._obs = np.asarray(obs, np.float32)
+        self._act = np.asarray(action, np.float32).reshape(self._sizes[2])
+        return self._observation(obs), reward, terminated, truncated, info
+
+    def _observation(self, observation: np.ndarray) -> np.ndarray:
+        return np.concatenate([np.asarray(observation, np.float32), self._last])

@@ -146,7 +146,8 @@ def _influence() -> Preset:
                   where="not in the paper: envs whose best greedy and influencing returns are "
                   "known by construction", interactions=2000,
                   groups=tuple(Group(folder="influence", env=env,
-                                     algos=("sac", "lili-no-influence", "lili", "oracle"),
+                                     algos=("sac", "lili-no-influence", "lili", "oracle",
+                                            "oracle-last"),
                                      env_kwargs=INFLUENCE_KWARGS.get(env, {}))
                                for env in INFLUENCE_ENVS))
 

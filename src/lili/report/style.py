@@ -8,7 +8,8 @@ import zlib
 __all__ = ["ALGO_ORDER", "ALGO_LABELS", "ALGO_COLORS", "DPI", "algo_label", "algo_color",
            "algo_sort_key", "env_key", "env_title", "env_sort_key"]
 
-ALGO_ORDER = ("random", "sac", "slac", "lili-no-influence", "lili", "lilac", "oracle")
+ALGO_ORDER = ("random", "sac", "slac", "lili-no-influence", "lili", "lilac", "oracle-last",
+              "oracle")
 ALGO_LABELS = {
     "random": "Random",
     "sac": "SAC",
@@ -16,6 +17,7 @@ ALGO_LABELS = {
     "lili-no-influence": "LILI (no influence)",
     "lili": "LILI",
     "lilac": "LILAC",
+    "oracle-last": "Oracle (last interaction)",
     "oracle": "Oracle",
 }
 ALGO_COLORS = {
@@ -25,6 +27,7 @@ ALGO_COLORS = {
     "lili-no-influence": "#ff7f0e",
     "lili": "#d62728",
     "lilac": "#8c564b",
+    "oracle-last": "#98df8a",
     "oracle": "#2ca02c",
 }
 _EXTRA_COLORS = ("#e377c2", "#bcbd22", "#17becf", "#7f7f7f", "#000000", "#aec7e8")
