@@ -39,6 +39,7 @@ from lili.experiments import reproduce
 from lili.experiments.presets import INFLUENCE_ENVS, get_preset
 from lili.report import find_runs
 from lili.report.stats import final_performance, mean_se
+from lili.report.style import algo_label
 from lili.runs import final_window
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -46,10 +47,6 @@ RESULTS = ROOT / "benchmarks" / "results"
 # Point Mass's greedy target takes a slow random walk round the circle, and Drift's partner
 # returns at random about every 20 interactions: average them out.
 SCRIPTED_BUDGET = {"lili/PointMass-v0": (3000, 2000), "lili/InfluenceDrift-v0": (3000, 2000)}
-LABELS = {"no-information": "scripted: no information", "greedy": "scripted: greedy",
-          "influencer": "scripted: influencer", "sac": "SAC", "oracle": "Oracle",
-          "oracle-last": "Oracle (last interaction)",
-          "lili": "LILI", "lili-no-influence": "LILI (no influence)"}
 
 
 def scripted_returns(env_id: str, interactions: int, last: int, seeds=(0, 1)) -> dict:
@@ -106,7 +103,7 @@ def table(env_id: str, scripted: dict, learned: dict) -> list[str]:
     base = learned.get("lili-no-influence")
     for name, row in scripted.items():
         known = "" if row["known"] is None else f"{row['known']:.3f}"
-        lines.append(f"| {LABELS.get(name, 'scripted: ' + name)} | {row['mean']:.3f} | {known} "
+        lines.append(f"| scripted: {name.replace('-', ' ')} | {row['mean']:.3f} | {known} "
                      "| | | |")
     for algo, row in learned.items():
         gap = "" if sac is None or top == sac else f"{(row['mean'] - sac) / (top - sac):.2f}"
@@ -116,7 +113,7 @@ def table(env_id: str, scripted: dict, learned: dict) -> list[str]:
             se = float(np.hypot(row["se"], base["se"]))
             diff = row["mean"] - base["mean"]
             versus = f"{diff:+.3f} ({diff / se:+.1f} s.e.)" if se > 0 else f"{diff:+.3f}"
-        lines.append(f"| {LABELS.get(algo, algo)} ({len(row['per_seed'])} seeds, "
+        lines.append(f"| {algo_label(algo)} ({len(row['per_seed'])} seeds, "
                      f"{row['interactions']} int.) | {row['mean']:.3f} ± {row['se']:.3f} | "
                      f"| {gap} | {100 * row['held']:.0f}% | {versus} |")
     return lines + [""]
@@ -158,7 +155,7 @@ def main() -> None:
                                  args.jobs, out / "ablate" / text.replace(",", "_"), fields)
         for env_id, by_algo in scores.items():
             for algo, score in by_algo.items():
-                learned.setdefault(env_id, {})[f"{LABELS[algo]} ({text})"] = score
+                learned.setdefault(env_id, {})[f"{algo_label(algo)} ({text})"] = score
     report, lines = {}, []
     for env_id in args.envs:
         scripted = scripted_returns(env_id, args.scripted, args.last)
