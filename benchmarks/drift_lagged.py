@@ -1,0 +1,134 @@
+"""Drift diagnostic: why does an agent told the last interaction not learn to influence?
+
+    python benchmarks/drift_lagged.py [--interactions 2000] [--seeds 3] [--out DIR]
+
+In ``lili/InfluenceDrift-v0`` LILI and the Oracle (last interaction) (``--algo oracle-last``:
+SAC told the partner's goal in the last interaction and that interaction's last observation
+and action) both stay at the no-information level, while the Oracle, told the current goal,
+learns to hold it next to the start (``benchmarks/README.md``, "Drift with a returning
+partner"). The partner reacts to the *sign* of where the ego ended, so for the lagged agent
+the next interaction's value steps at x_end = 0, inside a continuous input. This script
+trains SAC (the default agent config, as the ``influence`` preset) on two lagged
+observations that carry the same information about the partner's next goal:
+
+- ``position``: :class:`lili.envs.wrappers.LastInteractionObservation` (the Oracle (last
+  interaction) itself);
+- ``side``: the last interaction's goal and the side of 0 where it ended (+1 / -1, 0 before
+  the first interaction), so the step is a jump of a discrete input, as for the Oracle.
+
+If ``side`` learns to influence and ``position`` does not, the blurred step is the obstacle.
+Each seed scores the mean return over its last 10% (mean +- s.e. over seeds) and the share of
+those interactions with g = +-0.125 ("held"). Per-seed records (metrics.csv, summary.json)
+go under ``--out``/<variant>/seed_<k>; the table to ``benchmarks/results/drift_lagged.{md,json}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+import lili.envs  # noqa: F401 - registers the envs
+from lili.agents import SAC
+from lili.envs.influence import HELD
+from lili.envs.wrappers import LastInteractionObservation
+from lili.report.stats import mean_se
+from lili.runs import final_window
+
+ROOT = Path(__file__).resolve().parent.parent
+RESULTS = ROOT / "benchmarks" / "results"
+ENV = "lili/InfluenceDrift-v0"
+
+
+class LastSideObservation(gym.Wrapper):
+    """Append the last interaction's goal and the side of 0 where it ended (Drift's x is the
+    only observation); zeros before the first interaction of a sequence."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self.observation_space = spaces.Box(np.array([-1, -1, -1], np.float32),
+                                            np.array([1, 1, 1], np.float32), dtype=np.float32)
+        self._last = np.zeros(2, np.float32)
+        self._goal, self._end, self._started = 0.0, 0.0, False
+
+    def reset(self, **kwargs: Any):
+        obs, info = self.env.reset(**kwargs)
+        if kwargs.get("seed") is not None or not self._started:
+            self._last = np.zeros(2, np.float32)
+        else:
+            self._last = np.array([self._goal, 1.0 if self._end >= 0 else -1.0], np.float32)
+        self._started = True
+        self._goal, self._end = float(info["strategy"][0]), float(obs[0])
+        return self._obs(obs), info
+
+    def step(self, action: Any):
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        self._end = float(obs[0])
+        return self._obs(obs), reward, terminated, truncated, info
+
+    def _obs(self, obs: np.ndarray) -> np.ndarray:
+        return np.concatenate([np.asarray(obs, np.float32), self._last])
+
+
+VARIANTS = {"position": LastInteractionObservation, "side": LastSideObservation}
+
+
+def run(variant: str, seed: int, n: int, out: Path) -> dict[str, Any]:
+    """Train one seed of ``variant``; write its records; return its score."""
+    env = VARIANTS[variant](gym.make(ENV))
+    rows: list[dict[str, Any]] = []
+    t0 = time.process_time()
+    SAC(env, seed=seed).learn(n, callback=rows.append)
+    cpu = time.process_time() - t0
+    last = rows[-final_window(n):]
+    final = float(np.mean([r["return"] for r in last]))
+    held = float(np.mean([r["strategy_id"] in HELD[ENV] for r in last]))
+    folder = out / variant / f"seed_{seed}"
+    folder.mkdir(parents=True, exist_ok=True)
+    with open(folder / "metrics.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["interaction", "return", "strategy_id"])
+        w.writerows([r["interaction"], f"{r['return']:.6g}", r["strategy_id"]] for r in rows)
+    summary = {"env": ENV, "variant": variant, "seed": seed, "interactions": n,
+               "final_return": final, "held": held, "cpu_time_s": round(cpu, 1)}
+    (folder / "summary.json").write_text(json.dumps(summary, indent=1))
+    return summary
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--interactions", type=int, default=2000)
+    p.add_argument("--seeds", type=int, default=3)
+    p.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    p.add_argument("--out", default=str(ROOT / "runs" / "drift_lagged"))
+    args = p.parse_args()
+    if args.interactions < 100:
+        p.error(f"--interactions {args.interactions} is invalid; allowed: an integer >= 100")
+    if args.seeds < 1:
+        p.error(f"--seeds {args.seeds} is invalid; allowed: an integer >= 1")
+    out = Path(args.out)
+    results = {v: [run(v, s, args.interactions, out) for s in range(args.seeds)]
+               for v in args.variants}
+    lines = ["| lagged observation | final return | held | per seed | CPU-s per run |",
+             "|---|---:|---:|---|---:|"]
+    for v, seeds in results.items():
+        mean, se = mean_se([r["final_return"] for r in seeds])
+        per = " / ".join(f"{r['final_return']:.3f}" for r in seeds)
+        held = np.mean([r["held"] for r in seeds])
+        cpu = np.mean([r["cpu_time_s"] for r in seeds])
+        lines.append(f"| {v} | {mean:.3f} ± {se:.3f} | {100 * held:.0f}% | {per} | {cpu:.0f} |")
+    print("\n".join(lines))
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "drift_lagged.md").write_text("\n".join(lines) + "\n")
+    (RESULTS / "drift_lagged.json").write_text(json.dumps(results, indent=1))
+
+
+if __name__ == "__main__":
+    main()
