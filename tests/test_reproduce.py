@@ -69,7 +69,7 @@ def test_set_overrides_every_run_and_is_checked(tmp_path: Path, capsys) -> None:
     specs = plan(get_preset("influence"), tmp_path, algos=("lili",), quick=True,
                  overrides={"gamma": 0.999})
     assert {s.config["gamma"] for s in specs} == {0.999}
-    assert all(s.agent["gamma"] == 0.999 and s.agent["warmup_interactions"] == 2 for s in specs)
+    assert all(s.agent["gamma"] == 0.999 and s.agent["warmup_interactions"] == 3 for s in specs)
     out = tmp_path / "out"
     for bad, message in [("gamma=2", "--set: config gamma=2 is invalid; allowed: a number "
                                      "in [0, 1)"),
@@ -78,6 +78,21 @@ def test_set_overrides_every_run_and_is_checked(tmp_path: Path, capsys) -> None:
         assert main(["reproduce", "influence", "--set", bad, "--out", str(out)]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and message in err[0], err
+    assert not out.exists()
+
+
+def test_each_algo_checks_its_own_constraints_before_anything_runs(tmp_path: Path,
+                                                                    capsys) -> None:
+    # --quick once set a warm-up LILAC refuses; its runs failed one by one after the sweep began.
+    assert plan(get_preset("paper"), tmp_path, quick=True)
+    with pytest.raises(ValueError, match="warmup_interactions=2 is invalid for LILAC"):
+        plan(get_preset("point-mass"), tmp_path, algos=("lilac",),
+             overrides={"warmup_interactions": 2})
+    out = tmp_path / "out"
+    assert main(["reproduce", "point-mass", "--algos", "lilac", "--set",
+                 "warmup_interactions=2", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "warmup_interactions=2 is invalid for LILAC" in err[0], err
     assert not out.exists()
 
 

@@ -10,10 +10,11 @@ from lili.agents.base import ActingState, AgentState, CheckpointError, check_see
 from lili.agents.lilac import LILAC
 from lili.agents.lili import LILI
 from lili.agents.random_policy import RandomPolicy
-from lili.agents.sac import AGENTS, SAC, Oracle, check_extra, load_agent, make_agent
+from lili.agents.sac import AGENTS, SAC, Oracle, check_config, check_extra, load_agent, make_agent
 from lili.agents.slac import SLAC
 
-__all__ = ["SAC", "Oracle", "LILI", "LILAC", "ALGOS", "make_agent", "load_agent", "CheckpointError",
+__all__ = ["SAC", "Oracle", "LILI", "LILAC", "ALGOS", "make_agent", "load_agent", "check_config",
+           "CheckpointError",
            "ActingState", "AgentState", "LatentState", "SLAC", "RandomPolicy", "check_seed",
            "check_extra"]
 

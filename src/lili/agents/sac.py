@@ -640,6 +640,15 @@ def check_extra(config: AgentConfig) -> None:
         OPTIONS[key](config)
 
 
+def check_config(algo: str, config: AgentConfig) -> None:
+    """ValueError unless ``config`` is valid for ``algo``: :func:`check_extra`, plus the
+    algo's own constraints (LILAC's warm-up must cover its prior window), which otherwise
+    only show when the agent is built, i.e. after a sweep has started."""
+    check_extra(config)
+    if algo in OPTIONS:
+        OPTIONS[algo](config)
+
+
 def register(algo: str, cls: type[SAC], **kwargs: Any) -> None:
     """Make ``algo`` known to :func:`make_agent` and :func:`load_agent` (each agent module
     registers its own names, so this module needs to import none of them)."""

@@ -22,9 +22,10 @@ from lili.runs import run_dir_for
 __all__ = ["RunSpec", "plan", "run_status", "QUICK_INTERACTIONS", "QUICK_CONFIG"]
 
 QUICK_INTERACTIONS = 6
-# Learning starts after 2 random interactions and a checkpoint every 2, so that --quick goes
-# through every stage of a run (warm-up, updates, checkpoint, resume) in seconds.
-QUICK_CONFIG = {"warmup_interactions": 2, "checkpoint_every": 2}
+# Learning starts after 3 random interactions (LILAC's prior window needs 3) and a checkpoint
+# every 2, so that --quick goes through every stage of a run (warm-up, updates, checkpoint,
+# resume) in seconds.
+QUICK_CONFIG = {"warmup_interactions": 3, "checkpoint_every": 2}
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,8 +129,11 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
                 raise ValueError(f"presets {known.preset!r} and {spec.preset!r} define the run "
                                  f"{spec.run_dir} differently")
     result = list(specs.values())
+    from lili.agents import check_config  # here: it imports JAX, which --dry-run need not
+
     for spec in result:
-        spec.agent  # noqa: B018 - validates the config overrides before anything runs
+        # Before anything runs: the overrides, and what each algo demands of them.
+        check_config(spec.algo, AgentConfig.from_dict(spec.config))
         run_status(spec)
     return result
 
