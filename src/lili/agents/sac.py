@@ -721,8 +721,8 @@ class LastInteractionOracle(Oracle):
     strategy in the *last* interaction and how that interaction ended, not the current
     strategy. A diagnostic, not a paper baseline: it is what LILI's encoder (which reads only
     the last interaction) could at best tell LILI's policy, so LILI below it falls short in its
-    latent or in learning to use it, and it below the Oracle means the last interaction does
-    not determine the partner's next strategy.
+    latent or in learning to use it; it below the Oracle means the last interaction does not
+    determine the partner's next strategy or acting on it is harder to learn.
     """
 
     algo = "oracle-last"

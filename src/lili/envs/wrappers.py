@@ -11,6 +11,19 @@ from gymnasium import spaces
 __all__ = ["OracleObservation", "LastInteractionObservation"]
 
 
+def strategy_box(env: gym.Env, who: str) -> spaces.Box:
+    """The env's flat Box ``strategy_space``, or a ValueError saying that ``who`` needs it."""
+    inner = env.unwrapped
+    strat = getattr(inner, "strategy_space", None)
+    if not isinstance(strat, spaces.Box) or len(strat.shape) != 1:
+        raise ValueError(
+            f"{who} needs the partner's true strategy, and env {type(inner).__name__} has no "
+            f"flat Box `strategy_space` (got {strat!r}); allowed: an env that defines "
+            "strategy_space and info['strategy'] (every RepeatedInteractionEnv does)"
+        )
+    return strat
+
+
 class OracleObservation(gym.ObservationWrapper):
     """Append the partner's true strategy (``info["strategy"]``) to the observation.
 
@@ -20,14 +33,7 @@ class OracleObservation(gym.ObservationWrapper):
 
     def __init__(self, env: gym.Env) -> None:
         super().__init__(env)
-        inner = env.unwrapped
-        strat = getattr(inner, "strategy_space", None)
-        if not isinstance(strat, spaces.Box) or len(strat.shape) != 1:
-            raise ValueError(
-                f"the Oracle needs the partner's true strategy, and env {type(inner).__name__} "
-                f"has no flat Box `strategy_space` (got {strat!r}); allowed: an env that defines "
-                "strategy_space and info['strategy'] (every RepeatedInteractionEnv does)"
-            )
+        strat = strategy_box(env, "the Oracle")
         obs_space = env.observation_space
         if not isinstance(obs_space, spaces.Box) or len(obs_space.shape) != 1:
             raise ValueError(f"OracleObservation needs a flat Box observation; got {obs_space}")
@@ -64,20 +70,14 @@ class LastInteractionObservation(gym.Wrapper):
     SAC on this wrapper is the "Oracle (last interaction)": told everything about tau^{i-1}
     that the partner's next move depends on in the suite's envs, and nothing about interaction
     i itself. It bounds from above what LILI, whose encoder reads only tau^{i-1}, can get from
-    its latent; where it falls short of the Oracle, the partner's next strategy is not
-    determined by the last interaction (Drift's random returns).
+    its latent. Where it falls short of the Oracle, the last interaction does not determine the
+    partner's next strategy or acting on it is harder to learn (in Drift both, see
+    ``benchmarks/README.md``, "Drift with a returning partner").
     """
 
     def __init__(self, env: gym.Env) -> None:
         super().__init__(env)
-        inner = env.unwrapped
-        strat = getattr(inner, "strategy_space", None)
-        if not isinstance(strat, spaces.Box) or len(strat.shape) != 1:
-            raise ValueError(
-                f"the last-interaction Oracle needs the partner's true strategy, and env "
-                f"{type(inner).__name__} has no flat Box `strategy_space` (got {strat!r}); "
-                "allowed: an env that defines strategy_space and info['strategy']"
-            )
+        strat = strategy_box(env, "the last-interaction Oracle")
         obs_space, act_space = env.observation_space, env.action_space
         for name, space in (("observation", obs_space), ("action", act_space)):
             if not isinstance(space, spaces.Box) or len(space.shape) != 1:
