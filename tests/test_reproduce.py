@@ -119,6 +119,23 @@ def _fake_run(spec, rows: int, summary: int | None) -> None:
         (spec.run_dir / "summary.json").write_text(f'{{"interactions": {summary}}}')
 
 
+def test_a_table_report_keeps_its_variants_apart(tmp_path: Path) -> None:
+    # Every sigma holds the same (env, algo, seed) under other env kwargs; one find_runs over
+    # all of them refused them as duplicate seeds, so no noise or history table was written.
+    columns = ("interaction,return,length,success,strategy_0,strategy_1,strategy_id,critic_loss,"
+               "actor_loss,alpha,rep_loss,q,entropy,wall_time")
+    for k, spec in enumerate(plan(get_preset("noise"), tmp_path, quick=True)):
+        _fake_run(spec, 6, 6)
+        (spec.run_dir / "metrics.csv").write_text(columns + "\n" + "".join(
+            f"{i},{-1 - k - 0.1 * i},50,,0.5,0.5,-1,0.1,0.1,0.1,0.1,0.1,0.1,{i}\n"
+            for i in range(6)))
+    assert main(["reproduce", "noise", "--quick", "--out", str(tmp_path), "--no-progress"]) == 0
+    report = tmp_path / "noise" / "report"
+    assert (report / "variants.png").exists()
+    assert (report / "curves" / "noise_sigma_0.4" / "results.md").exists()
+    assert "0.4" in (report / "results.md").read_text()
+
+
 def test_run_status_new_resume_done(tmp_path: Path) -> None:
     a, b, c, d = plan(get_preset("driving-2d"), tmp_path, seeds=1)[:4]
     _fake_run(b, 3, None)       # killed half-way

@@ -25,14 +25,20 @@ def _header(preset: Preset, specs: list[RunSpec]) -> str:
 
 
 def _table_report(preset: Preset, specs: list[RunSpec], out: Path) -> dict[str, Any]:
-    runs = find_runs([s.run_dir for s in specs], upto=min(s.interactions for s in specs))
+    upto = min(s.interactions for s in specs)
     variants, bounds = [], []
+    by_folder: dict[str, list] = {}
     for group in preset.groups:
-        mine = [r for r in runs if any(s.folder == group.folder and s.algo in group.algos
-                                       and s.run_dir.resolve() == r.path for s in specs)]
+        dirs = [s.run_dir for s in specs if s.folder == group.folder and s.algo in group.algos]
+        if not dirs:
+            continue
+        # One group at a time: the groups hold the same (env, algo, seed) under different env
+        # kwargs (sigma = 0.2 and 0.4), which one find_runs call refuses as duplicate seeds.
+        mine = find_runs(dirs, upto=upto)
+        by_folder.setdefault(group.folder, []).extend(mine)
         if group.value is None:
             bounds += mine
-        elif mine:
+        else:
             variants.append((group.label, group.value, mine))
     rows = variant_rows(variants, bounds, preset.table)
     bounds_from = ("the Point Mass preset's runs (sigma = 0, N = 1)" if bounds
@@ -40,8 +46,10 @@ def _table_report(preset: Preset, specs: list[RunSpec], out: Path) -> dict[str, 
     markdown = variant_markdown(rows, preset.table, bounds_from)
     out.mkdir(parents=True, exist_ok=True)
     files = {"variants.png": str(plot_variants(rows, preset.table, out / "variants.png"))}
-    curves = write_report([r.path for r in runs], out / "curves", upto=runs[0].n_interactions)
-    files.update({f"curves/{k}": v for k, v in curves["files"].items()})
+    for folder, runs in by_folder.items():  # learning curves per variant, never mixed
+        name = "curves/" + folder.replace("/", "_")
+        curves = write_report([r.path for r in runs], out / name, upto=upto)
+        files.update({f"{name}/{k}": v for k, v in curves["files"].items()})
     return {"rows": rows, "markdown": markdown, "files": files}
 
 
