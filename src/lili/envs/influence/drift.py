@@ -77,6 +77,12 @@ RETURNS = 0.05  # the default probability that the partner goes back near the st
 MARGIN = 0.05  # how far across 0 the scripted influencer ends
 
 
+def drifted(index: int, outcome: int) -> int:
+    """The goal id one grid step toward ``outcome``'s side (-1 left, +1 right), held at the
+    outermost points: the partner's move when it does not return."""
+    return int(np.clip(index + outcome, 0, len(GOALS) - 1))
+
+
 class DriftPartner:
     """A goal on :data:`GOALS` that moves one point toward the side where the ego ended, or
     with probability ``returns`` goes back to one of :data:`NEAR_START`."""
@@ -106,7 +112,7 @@ class DriftPartner:
         if rng.random() < self.returns:
             self.index = NEAR_START[int(rng.integers(2))]
         else:
-            self.index = int(np.clip(self.index + outcome, 0, len(GOALS) - 1))
+            self.index = drifted(self.index, outcome)
 
 
 class InfluenceDriftEnv(LineEnv):
@@ -161,8 +167,7 @@ def from_last_interaction(told: Any) -> Any:
     def policy(obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
         if info["t"] == 0 and memory["g"] is not None:
             index = int(np.argmin(np.abs(GOALS - memory["g"])))
-            step = 1 if memory["end"] >= 0 else -1
-            memory["predicted"] = float(GOALS[int(np.clip(index + step, 0, len(GOALS) - 1))])
+            memory["predicted"] = float(GOALS[drifted(index, 1 if memory["end"] >= 0 else -1)])
         # Within the interaction its rewards reveal this g; it is only used after it ends.
         memory["g"] = float(info["strategy"][0])
         if memory["predicted"] is None:
