@@ -1,6 +1,7 @@
 """Trained blockers against the human-like bot striker: blocks out of 40, beside the paper.
 
-    python benchmarks/play_bot.py LABEL=RUN_GLOB [LABEL=RUN_GLOB ...] [--shots 40] [--sessions 3]
+    python benchmarks/play_bot.py LABEL=RUN_GLOB [LABEL=scripted:NAME ...] [--shots 40]
+        [--sessions 3] [--aim-noise 0.05] [--lapse 0.1] [--name play_bot]
 
 Each ``RUN_GLOB`` names air hockey run folders (one per training seed); every run plays
 ``--sessions`` sessions of ``--shots`` shots against :class:`lili.play.striker.BotStriker` (the
@@ -8,7 +9,12 @@ paper's protocol: the striker aims away from where the blocker blocked it last, 
 and lapses) through the same game session as the page. Prints blocks per 40 shots (mean +- s.e.
 over runs, each run's mean over sessions) and blocks by the shot's mode beside the paper's
 expert-human study (SAC 18/40, LILI (no influence) 29/40), and writes
-``benchmarks/results/play_bot.json``.
+``benchmarks/results/<--name>.json``.
+
+``LABEL=scripted:NAME`` plays a scripted blocker of ``lili.envs.air_hockey.scripted`` instead
+(:class:`lili.play.policy.ScriptedBlocker`); ``scripted:greedy`` is told each shot's mode and
+so gives the ceiling of a blocker that sees what the learned ones see, where only the bot's
+aim noise makes it miss.
 """
 
 from __future__ import annotations
@@ -21,16 +27,20 @@ from pathlib import Path
 import numpy as np
 
 from lili.play.bot import PAPER_HUMAN, run_bot
-from lili.play.policy import Blocker, agent_file_for_run, make_play_env
+from lili.play.policy import Blocker, ScriptedBlocker, agent_file_for_run, make_play_env
 from lili.play.striker import MODE_NAMES, BotConfig
 
 RESULTS = Path(__file__).resolve().parent / "results"
 
 
 def score_run(run: str, shots: int, sessions: int, config: BotConfig) -> dict:
-    path, cfg = agent_file_for_run(run)
-    env_kwargs = dict(cfg.get("env_kwargs") or {})
-    blocker = Blocker.load(path, make_play_env(env_kwargs))
+    if run.startswith("scripted:"):
+        env_kwargs: dict = {}
+        blocker = ScriptedBlocker(run.split(":", 1)[1])
+    else:
+        path, cfg = agent_file_for_run(run)
+        env_kwargs = dict(cfg.get("env_kwargs") or {})
+        blocker = Blocker.load(path, make_play_env(env_kwargs))
     blocks, by_mode = [], np.zeros((len(MODE_NAMES), 2))
     for s in range(sessions):
         res = run_bot(blocker, env_kwargs, shots, config, seed=s)
@@ -49,6 +59,7 @@ def main() -> None:
     p.add_argument("--sessions", type=int, default=3)
     p.add_argument("--aim-noise", type=float, default=BotConfig.aim_noise)
     p.add_argument("--lapse", type=float, default=BotConfig.lapse)
+    p.add_argument("--name", default="play_bot", help="results file name (without .json)")
     args = p.parse_args()
     config = BotConfig(aim_noise=args.aim_noise, lapse=args.lapse)
     rows, out = [], []
@@ -56,7 +67,7 @@ def main() -> None:
         if "=" not in group:
             p.error(f"{group!r} is invalid; allowed: LABEL=RUN_GLOB")
         label, pattern = group.split("=", 1)
-        runs = sorted(glob.glob(pattern))
+        runs = [pattern] if pattern.startswith("scripted:") else sorted(glob.glob(pattern))
         if not runs:
             p.error(f"{pattern!r} matches no run folder")
         scores = [score_run(r, args.shots, args.sessions, config) for r in runs]
@@ -78,7 +89,7 @@ def main() -> None:
                        "|---|---:|---:|" + "---:|" * len(MODE_NAMES) + "---|", *rows])
     print(table)
     RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "play_bot.json").write_text(json.dumps({"table": table, "groups": out},
+    (RESULTS / f"{args.name}.json").write_text(json.dumps({"table": table, "groups": out},
                                                       indent=1))
 
 

@@ -215,6 +215,22 @@ def test_bot_session_is_deterministic_and_follows_the_rule(blocker, tmp_path):
         assert names.index(nxt["mode"]) == NEXT_MODE[(names.index(prev["mode"]), prev["side"])]
 
 
+def test_scripted_blockers_give_the_bots_ceiling():
+    """Told the shot's mode, the greedy blocker blocks every noise-free shot of the bot and
+    misses only through aim noise; the middle one (not told) blocks middle shots only."""
+    from lili.play.bot import run_bot
+    from lili.play.policy import ScriptedBlocker
+
+    exact = run_bot(ScriptedBlocker("greedy"), {}, 20, BotConfig(aim_noise=0.0, lapse=0.3))
+    assert exact["blocks"] == 20 and {r["mode"] for r in exact["rows"]} == set(MODE_NAMES)
+    noisy = run_bot(ScriptedBlocker("greedy"), {}, 20, BotConfig(aim_noise=0.1, lapse=0.0))
+    assert noisy["blocks"] < 18
+    middle = run_bot(ScriptedBlocker("middle"), {}, 20, BotConfig(aim_noise=0.0, lapse=0.3))
+    assert middle["blocks"] == middle["by_mode"]["middle"][1] > 0
+    with pytest.raises(ValueError, match="scripted blocker 'oracle' is unknown; allowed: "):
+        ScriptedBlocker("oracle")
+
+
 @pytest.mark.parametrize("raw, match", [
     (b"\x00\x01", "binary"),
     ("x" * 1025, "too long"),

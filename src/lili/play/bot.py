@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from lili.play.policy import Blocker
+from lili.play.policy import Blocker, ScriptedBlocker
 from lili.play.record import SessionRecord
 from lili.play.session import GameSession
 from lili.play.striker import MODE_NAMES, BotConfig, BotStriker
@@ -21,7 +21,7 @@ __all__ = ["run_bot", "PAPER_HUMAN", "bot_report"]
 PAPER_HUMAN = {"sac": 18, "lili-no-influence": 29}
 
 
-def run_bot(blocker: Blocker, env_kwargs: dict[str, Any], shots: int = 40,
+def run_bot(blocker: Blocker | ScriptedBlocker, env_kwargs: dict[str, Any], shots: int = 40,
             config: BotConfig | None = None, seed: int = 0,
             record: SessionRecord | None = None) -> dict[str, Any]:
     """Play ``shots`` shots of the bot against ``blocker``; return the score and every shot."""

@@ -16,8 +16,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["Blocker", "BlockerGame", "SHIPPED_AGENT", "agent_file_for_run", "make_play_env",
-           "train_and_save", "interaction_steps"]
+__all__ = ["Blocker", "BlockerGame", "ScriptedBlocker", "ScriptedGame", "SHIPPED_AGENT",
+           "agent_file_for_run", "make_play_env", "train_and_save", "interaction_steps"]
 
 SHIPPED_AGENT = Path(__file__).with_name("agents") / "air_hockey.msgpack"
 
@@ -83,6 +83,9 @@ class BlockerGame:
         """The latent the agent will act with in the next (or current) interaction."""
         return np.asarray(self._next.z, np.float32)
 
+    def begin(self, info: dict[str, Any]) -> None:
+        """The interaction's first info; a learned blocker is never told the striker's mode."""
+
     def act(self, obs: np.ndarray) -> np.ndarray:
         """The action for ``obs`` in env units."""
         if not self._traj["obs"]:
@@ -109,6 +112,58 @@ class BlockerGame:
         self.buffer.add(traj, np.asarray(next_first_obs, np.float32))
         self._next = self.agent.next_state(self.buffer)
         self._traj = {k: [] for k in self._traj}
+        return self.latent
+
+
+class ScriptedBlocker:
+    """A scripted blocker of :mod:`lili.envs.air_hockey.scripted` in the learned blocker's place.
+
+    The scripted blockers that are *told* the shot's mode (``greedy``, ``crossing``,
+    ``influencer``) read it from the interaction's first info, which in a play session is the
+    mode the shot is recorded as (lapses included). Against a striker with aim noise they give
+    the ceiling of any blocker that sees what the learned one sees (its paddle and the puck's
+    position along the table, never the puck's lateral position): knowing the mode leaves
+    only the aim noise to miss on.
+    """
+
+    def __init__(self, name: str, bank_shots: bool = True, seed: int = 0) -> None:
+        from lili.envs.air_hockey.scripted import BLOCKERS
+
+        if name not in BLOCKERS:
+            raise ValueError(f"scripted blocker {name!r} is unknown; allowed: "
+                             f"{', '.join(BLOCKERS)}")
+        self.name, self.bank_shots, self.seed = name, bool(bank_shots), int(seed)
+        self.algo = f"scripted-{name}"
+        self.source = f"lili.envs.air_hockey.scripted ({name})"
+        self.latent_dim = 0
+        self.interactions = 0
+
+    def new_game(self) -> ScriptedGame:
+        from lili.envs.air_hockey.scripted import make_blocker
+
+        return ScriptedGame(make_blocker(self.name, self.seed, self.bank_shots))
+
+
+class ScriptedGame:
+    """One game of a :class:`ScriptedBlocker` (the :class:`BlockerGame` protocol)."""
+
+    latent = np.zeros(0, np.float32)
+
+    def __init__(self, policy: Any) -> None:
+        self.policy = policy
+        self.info: dict[str, Any] = {}
+
+    def begin(self, info: dict[str, Any]) -> None:
+        """Keep the interaction's first info: the told blockers read the mode from it."""
+        self.info = dict(info)
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        return np.asarray(self.policy(np.asarray(obs, np.float32), self.info), np.float32)
+
+    def observe(self, reward: float, next_obs: np.ndarray) -> None:
+        """A scripted blocker keeps nothing of the interaction."""
+
+    def end_interaction(self, next_first_obs: np.ndarray) -> np.ndarray:
         return self.latent
 
 

@@ -14,7 +14,7 @@ from typing import Any
 
 import mujoco
 
-from lili.play.policy import Blocker, interaction_steps, make_play_env
+from lili.play.policy import Blocker, ScriptedBlocker, interaction_steps, make_play_env
 from lili.play.probe import ModeProbe
 from lili.play.record import SessionRecord
 from lili.play.striker import MODE_NAMES, AimedStriker
@@ -25,7 +25,7 @@ __all__ = ["GameSession", "make_play_env"]
 class GameSession:
     """A game of ``shots`` shots; see the module docstring."""
 
-    def __init__(self, blocker: Blocker, env_kwargs: dict[str, Any], shots: int,
+    def __init__(self, blocker: Blocker | ScriptedBlocker, env_kwargs: dict[str, Any], shots: int,
                  record: SessionRecord | None = None, probe: ModeProbe | None = None,
                  seed: int = 0) -> None:
         self.env = make_play_env(env_kwargs)
@@ -74,9 +74,10 @@ class GameSession:
             raise ValueError(f"the game is over ({self.shots} of {self.shots} shots)")
         mode = self.striker.aim(aim)
         if self.shot == 0:
-            obs, _ = self.env.reset(seed=self.seed)
+            obs, first_info = self.env.reset(seed=self.seed)
         else:
-            obs, _ = self.env.reset()
+            obs, first_info = self.env.reset()
+        self.game.begin(first_info)
         first_obs, ret, t, info = obs, 0.0, 0, {}
         yield self.state(0)
         start = time.perf_counter()
