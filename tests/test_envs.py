@@ -333,3 +333,22 @@ def test_last_interaction_observation_appends_how_the_last_interaction_went(env_
             assert obs in env.observation_space
             np.testing.assert_array_equal(obs[inner:], appended)  # fixed within the interaction
         seen.append({"strategy": strategy, "obs": obs[:inner], "act": a})
+
+
+class _NoStrategyInfo(gym.Wrapper):
+    """An env that declares a strategy space but leaves info['strategy'] out of reset()."""
+
+    def reset(self, **kwargs):
+        obs, info = self.env.reset(**kwargs)
+        return obs, {k: v for k, v in info.items() if k != "strategy"}
+
+
+@pytest.mark.parametrize(("wrapper", "who"), [
+    (OracleObservation, "the Oracle"),
+    (LastInteractionObservation, "the last-interaction Oracle"),
+])
+def test_oracle_wrappers_need_the_strategy_in_reset_info(wrapper, who: str) -> None:
+    env = wrapper(_NoStrategyInfo(gym.make("lili/PointMass-v0")))
+    with pytest.raises(ValueError, match=f"^{who} needs info\\['strategy'\\] from reset\\(\\); "
+                                         "env PointMassEnv gave keys"):
+        env.reset(seed=0)

@@ -24,6 +24,14 @@ def strategy_box(env: gym.Env, who: str) -> spaces.Box:
     return strat
 
 
+def reset_strategy(env: gym.Env, info: dict[str, Any], who: str) -> np.ndarray:
+    """``info["strategy"]`` of a reset as float32, or a ValueError saying that ``who`` needs it."""
+    if "strategy" not in info:
+        raise ValueError(f"{who} needs info['strategy'] from reset(); env "
+                         f"{type(env.unwrapped).__name__} gave keys {sorted(info)}")
+    return np.asarray(info["strategy"], dtype=np.float32)
+
+
 class OracleObservation(gym.ObservationWrapper):
     """Append the partner's true strategy (``info["strategy"]``) to the observation.
 
@@ -46,10 +54,7 @@ class OracleObservation(gym.ObservationWrapper):
 
     def reset(self, **kwargs: Any):
         obs, info = self.env.reset(**kwargs)
-        if "strategy" not in info:
-            raise ValueError(f"the Oracle needs info['strategy'] from reset(); env "
-                             f"{type(self.env.unwrapped).__name__} gave keys {sorted(info)}")
-        self._strategy = np.asarray(info["strategy"], dtype=np.float32)
+        self._strategy = reset_strategy(self.env, info, "the Oracle")
         return self.observation(obs), info
 
     def step(self, action: Any):
@@ -99,16 +104,14 @@ class LastInteractionObservation(gym.Wrapper):
 
     def reset(self, **kwargs: Any):
         obs, info = self.env.reset(**kwargs)
-        if "strategy" not in info:
-            raise ValueError(f"the last-interaction Oracle needs info['strategy'] from reset(); "
-                             f"env {type(self.env.unwrapped).__name__} gave keys {sorted(info)}")
+        strategy = reset_strategy(self.env, info, "the last-interaction Oracle")
         if kwargs.get("seed") is not None or not self._started:
             # A seeded reset starts a new sequence: nothing came before it.
             self._clear()
         else:
             self._last = np.concatenate([self._strategy, self._obs, self._act])
         self._started = True
-        self._strategy = np.asarray(info["strategy"], np.float32)
+        self._strategy = strategy
         self._obs = np.asarray(obs, np.float32)
         return self._observation(obs), info
 
