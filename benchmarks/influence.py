@@ -21,7 +21,9 @@ Gap closed = (R - R_SAC) / (R_influencer - R_SAC); "held" = the share of those i
 in which the partner was at a strategy the scripted influencer holds it at
 (:data:`lili.envs.influence.HELD`), the behavioural evidence of influence; "vs no influence" =
 R - R_LILI(no influence) in units of their combined standard errors. Writes
-``benchmarks/results/<--name>.{json,md}``.
+``benchmarks/results/<--name>.{json,md}``; with ``--merge`` the learned rows already in that
+JSON that this invocation does not recompute are kept (so ablations can be added one command
+at a time).
 """
 
 from __future__ import annotations
@@ -119,6 +121,20 @@ def table(env_id: str, scripted: dict, learned: dict) -> list[str]:
     return lines + [""]
 
 
+def merged(path: Path, learned: dict) -> dict:
+    """``learned`` over the learned rows of an earlier report at ``path`` (new rows win)."""
+    if not path.exists():
+        return learned
+    try:
+        old = json.loads(path.read_text())
+        out = {env: dict(entry["learned"]) for env, entry in old.items()}
+    except (ValueError, KeyError, TypeError, AttributeError) as e:
+        raise SystemExit(f"--merge: {path} is not a report of this script ({e})") from None
+    for env_id, rows in learned.items():
+        out.setdefault(env_id, {}).update(rows)
+    return out
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--envs", nargs="+", default=list(SUITE), choices=list(SUITE))
@@ -134,6 +150,8 @@ def main() -> None:
     p.add_argument("--jobs", type=int, default=2, help="runs at a time")
     p.add_argument("--out", default=str(ROOT / "runs" / "bench_influence"))
     p.add_argument("--name", default="influence", help="results file stem")
+    p.add_argument("--merge", action="store_true",
+                   help="keep the learned rows of results/<--name>.json not recomputed now")
     args = p.parse_args()
     if not 1 <= args.last <= args.scripted:
         p.error(f"--last {args.last} is invalid; allowed: 1 to --scripted ({args.scripted})")
@@ -156,6 +174,8 @@ def main() -> None:
         for env_id, by_algo in scores.items():
             for algo, score in by_algo.items():
                 learned.setdefault(env_id, {})[f"{algo_label(algo)} ({text})"] = score
+    if args.merge:
+        learned = merged(RESULTS / f"{args.name}.json", learned)
     report, lines = {}, []
     for env_id in args.envs:
         scripted = scripted_returns(env_id, args.scripted, args.last)
