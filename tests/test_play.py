@@ -329,21 +329,45 @@ def test_cli_bad_run_and_record(capsys, tmp_path, agent_file):
     assert code == 2 and "corrupt" in err and not (run / "play").exists()
 
 
-def test_ship_script_at_a_tiny_budget(tmp_path):
-    """The script that makes the shipped agent, rerun at a budget below the warm-up."""
-    out = tmp_path / "agents" / "air_hockey.msgpack"
+def test_ship_script_at_a_tiny_budget_and_from_a_run(tmp_path, capsys):
+    """The script that makes the shipped agent, rerun just past the warm-up; `lili train` runs
+    the same loop, so the run's final agent file is byte for byte the script's, and
+    --from-run ships it unchanged (or refuses, before writing anything, a run that does not fit).
+    """
+    from lili.play import ship
+
     cfg = tmp_path / "small.yaml"
-    cfg.write_text(yaml.safe_dump({**SMALL, "warmup_interactions": 5}))
-    proc = subprocess.run([sys.executable, "-m", "lili.play.ship", "--interactions", "3",
-                           "--config", str(cfg), "--env-kwarg", "aim_noise=0.03",
-                           "--out", str(out)], capture_output=True, text=True, timeout=300)
+    cfg.write_text(yaml.safe_dump({**SMALL, "warmup_interactions": 3}))
+    common = ["--seed", "1", "--interactions", "5", "--config", str(cfg),
+              "--env-kwarg", "aim_noise=0.03"]
+    out = tmp_path / "agents" / "air_hockey.msgpack"
+    proc = subprocess.run([sys.executable, "-m", "lili.play.ship", *common, "--out", str(out)],
+                          capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert out.is_file() and out.stat().st_size < 5 * 2**20
     meta = json.loads(out.with_suffix(".json").read_text())
-    assert meta["interactions"] == 3 and meta["env_kwargs"] == {"aim_noise": 0.03}
+    assert meta["interactions"] == 5 and meta["env_kwargs"] == {"aim_noise": 0.03}
     blocker = Blocker.load(out, make_play_env(meta["env_kwargs"]))
-    assert blocker.agent.num_interactions == 3
-    bad = subprocess.run([sys.executable, "-m", "lili.play.ship", "--interactions", "0",
-                          "--out", str(tmp_path / "x.msgpack")], capture_output=True, text=True)
-    assert bad.returncode == 2 and "--interactions 0 is invalid" in bad.stderr
-    assert not (tmp_path / "x.msgpack").exists()
+    assert blocker.agent.num_interactions == 5
+
+    assert cli.main(["train", "lili/AirHockey-v0", "--algo", "lili", *common, "--out",
+                     str(tmp_path / "runs"), "--no-progress"]) == 0
+    run = tmp_path / "runs" / "AirHockey-v0" / "lili" / "seed_1"
+    shipped = tmp_path / "from_run" / "air_hockey.msgpack"
+    assert ship.main(["--from-run", str(run), "--out", str(shipped)]) == 0
+    assert shipped.read_bytes() == out.read_bytes()
+    meta = json.loads(shipped.with_suffix(".json").read_text())
+    assert meta["interactions"] == 5 and meta["env_kwargs"] == {"aim_noise": 0.03}
+    assert meta["trained_by"].endswith("--interactions 5 --env-kwarg aim_noise=0.03")
+
+    cfg_file = run / "config.yaml"
+    cfg_file.write_text(yaml.safe_dump({**yaml.safe_load(cfg_file.read_text()),
+                                        "interactions": 9}))
+    other = tmp_path / "other.msgpack"
+    capsys.readouterr()
+    assert ship.main(["--from-run", str(run), "--out", str(other)]) == 2
+    assert "is not finished (5 of 9 interactions); allowed: a finished run" in \
+        capsys.readouterr().err
+    assert ship.main(["--from-run", str(tmp_path), "--out", str(other)]) == 2
+    assert "is not a run folder (config.yaml is missing)" in capsys.readouterr().err
+    assert not other.exists()

@@ -4,15 +4,22 @@ Writes ``agents/air_hockey.msgpack`` (the agent, under 5 MB) and ``agents/air_ho
 (how it was trained: algo, interactions, seed, env options, config) beside this module, so that
 ``lili play air-hockey`` works right after ``pip install``. ``--out`` writes elsewhere (tests
 rerun the script at a tiny budget that way).
+
+``--from-run RUN`` ships the final agent of an air hockey run folder of ``lili train`` instead of
+training again: ``lili train`` and this script run the same loop, so the agent file is the same
+byte for byte for the same algo, budget, seed, env options and config (a test checks it), and
+the run's config.yaml becomes the JSON's record of how it was trained.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -35,7 +42,16 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--config", help="YAML file with AgentConfig fields to change")
     p.add_argument("--out", default=str(SHIPPED_AGENT),
                    help=f"agent file (default {SHIPPED_AGENT})")
+    p.add_argument("--from-run", metavar="RUN",
+                   help="ship the final agent of this air hockey run folder (no training)")
     args = p.parse_args(argv)
+    if args.from_run:
+        try:
+            out, meta = copy_from_run(args.from_run, args.out)
+        except ValueError as e:
+            print(f"lili.play.ship: error: {e}", file=sys.stderr)
+            return 2
+        return _finish(Path(out), meta)
     try:
         if args.interactions < 1:
             raise ValueError(f"--interactions {args.interactions} is invalid; allowed: >= 1")
@@ -56,14 +72,47 @@ def main(argv: list[str] | None = None) -> int:
     except (ValueError, FileNotFoundError) as e:
         print(f"lili.play.ship: error: {e}", file=sys.stderr)
         return 2
+    meta = {"algo": args.algo, "interactions": args.interactions, "seed": args.seed,
+            "env_kwargs": env_kwargs, "config": config,
+            "wall_time_s": round(time.time() - start, 1)}
+    return _finish(Path(out), meta)
+
+
+def copy_from_run(run: str | Path, out: str | Path) -> tuple[Path, dict[str, Any]]:
+    """Copy the final agent of air hockey run folder ``run`` to ``out``; return the path and
+    the record of how it was trained. ValueError naming the folder when it does not fit."""
+    from lili.runs import latest_checkpoint, read_run_config
+
+    cfg = read_run_config(run)  # CheckpointError is a ValueError too
+    if cfg["env"] != "lili/AirHockey-v0":
+        raise ValueError(f"{run} is a run of {cfg['env']!r}; allowed: a lili/AirHockey-v0 run")
+    ck, done = latest_checkpoint(run)
+    if done != int(cfg["interactions"]):
+        raise ValueError(f"{run} is not finished ({done} of {cfg['interactions']} "
+                         "interactions); allowed: a finished run")
+    path = ck / "agent.msgpack"
+    if path.stat().st_size > MAX_BYTES:
+        raise ValueError(f"{path} is {path.stat().st_size / 2**20:.1f} MiB; the shipped agent "
+                         "must stay under 5 MiB")
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(path, out)
+    meta = {"algo": cfg["algo"], "interactions": done, "seed": cfg["seed"],
+            "env_kwargs": cfg.get("env_kwargs") or {}, "config": cfg["agent"],
+            "trained_by": f"lili train lili/AirHockey-v0 --algo {cfg['algo']} --seed "
+                          f"{cfg['seed']} --interactions {done}"
+                          + "".join(f" --env-kwarg {k}={v}"
+                                    for k, v in (cfg.get("env_kwargs") or {}).items()),
+            "from_run": str(run)}
+    return Path(out), meta
+
+
+def _finish(out: Path, meta: dict[str, Any]) -> int:
+    """Check the size, write the JSON record beside the agent, and say so."""
     size = out.stat().st_size
     if size > MAX_BYTES:
         print(f"lili.play.ship: error: {out} is {size / 2**20:.1f} MiB; the shipped agent must "
               "stay under 5 MiB", file=sys.stderr)
         return 2
-    meta = {"algo": args.algo, "interactions": args.interactions, "seed": args.seed,
-            "env_kwargs": env_kwargs, "config": config,
-            "wall_time_s": round(time.time() - start, 1)}
     Path(out).with_suffix(".json").write_text(json.dumps(meta, indent=1) + "\n")
     print(f"wrote {out} ({size / 2**20:.2f} MiB) and {Path(out).with_suffix('.json').name}")
     return 0
