@@ -93,6 +93,22 @@ def test_point_mass_scripted_influencer_beats_greedy_beats_no_information() -> N
     assert r["greedy"] >= r["no-information"] + 3.0
 
 
+def test_point_mass_last_interaction_influencer_is_the_influencer_without_noise() -> None:
+    """Told only what the last interaction predicts, the influencer matches the one told the
+    target when the partner's step is exact, and loses to it once the step is noisy."""
+    from lili.envs.influence.point_mass import LastInteractionInfluencer, influencer
+    from lili.envs.point_mass import PointMassEnv
+
+    def mean_return(policy, noise: float) -> float:
+        return play(PointMassEnv(step_noise=noise), policy, 120, 3).last(100).mean_return()
+
+    exact = mean_return(LastInteractionInfluencer(), 0.0)
+    # Equal up to the rounding of recovering the angle from the target (arctan2).
+    assert exact == pytest.approx(mean_return(influencer, 0.0), abs=1e-6)
+    assert exact > -0.11
+    assert mean_return(LastInteractionInfluencer(), 0.6) < mean_return(influencer, 0.6) - 0.2
+
+
 def test_drift_rules() -> None:
     env = InfluenceDriftEnv(returns=0.0)
     obs, info = env.reset(seed=0)

@@ -19,6 +19,12 @@ Each is told the target (``info["strategy"]``) except the no-information one:
 - **no information**: go to the circle's centre and stay, which is always 0.1 from the target
   (the best fixed point when the target goes round the whole circle, which it does: ending
   inside every time turns it clockwise every time): **-5.01** (the paper's SAC: -5.05).
+
+:class:`LastInteractionInfluencer` is the influencer handed instead the target that the last
+interaction predicts (its target moved one noise-free step by the side where the ego ended),
+everything an agent reading only the last interaction (LILI) can know; under the noisy
+partner (``step_noise``) the prediction is off by the noise, and its return is the bound of
+such an agent (``benchmarks/noise_scripted.py``).
 """
 
 from __future__ import annotations
@@ -27,9 +33,10 @@ from typing import Any
 
 import numpy as np
 
-from lili.envs.point_mass import BOUND, CENTER, SPEED
+from lili.envs.point_mass import BOUND, CENTER, RADIUS, SPEED, CirclePartner
 
-__all__ = ["SCRIPTED", "KNOWN_RETURNS", "GreedyCoin", "influencer", "no_information"]
+__all__ = ["SCRIPTED", "KNOWN_RETURNS", "GreedyCoin", "influencer", "no_information",
+           "LastInteractionInfluencer"]
 
 HORIZON = 50
 MARGIN = 0.005  # how far inside or outside the circle the last step ends
@@ -74,6 +81,38 @@ def influencer(obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
 def no_information(obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
     """Not told the target: sit at the circle's centre."""
     return _move_to(np.asarray(obs, np.float64), CENTER)
+
+
+class LastInteractionInfluencer:
+    """The influencer told the target the last interaction predicts (see the module docs);
+    before any interaction it plays :func:`no_information`. ``inside_turn`` is the env's rule.
+    Stateful: one instance per rollout."""
+
+    def __init__(self, inside_turn: str = "clockwise") -> None:
+        # The partner's own (noise-free) update predicts the next target: one rule, one place.
+        self.partner = CirclePartner(0.0, 1, inside_turn)
+        self.predicted: np.ndarray | None = None
+        self.last_target: np.ndarray | None = None
+        self.ended_inside = False
+
+    def __call__(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        if info["t"] == 0:
+            self.predicted = None
+            if self.last_target is not None:
+                rel = self.last_target - CENTER
+                self.partner.theta = float(np.arctan2(rel[1], rel[0]))
+                self.partner.update(self.ended_inside, np.random.default_rng(0))
+                self.predicted = self.partner.target()
+            # Kept for the next interaction only: this one's rewards reveal it after the fact.
+            self.last_target = np.asarray(info["strategy"], np.float64)
+        if self.predicted is None:
+            action = no_information(obs, info)
+        else:
+            action = influencer(obs, {**info, "strategy": self.predicted})
+        if info["t"] == HORIZON - 1:
+            end = np.clip(np.asarray(obs, np.float64) + SPEED * action, -BOUND, BOUND)
+            self.ended_inside = bool(np.linalg.norm(end - CENTER) < RADIUS)
+        return action
 
 
 # name -> factory(seed) -> policy(obs, info)
