@@ -130,9 +130,35 @@ def test_reset_seed_replays_the_sequence() -> None:
     assert play(3) != play(4)
 
 
+def test_lapses_leave_the_table_and_lapse_zero_is_the_appendix_striker() -> None:
+    from lili.envs.air_hockey.env import NEXT_MODE, StrikerPartner
+
+    def modes(partner: StrikerPartner, outcomes) -> list:
+        rng = np.random.default_rng(5)
+        partner.reset(rng)
+        out = [partner.mode]
+        for o in outcomes:
+            partner.update(o, rng)
+            out.append((partner.mode, partner.aim_offset))
+        return out
+
+    outcomes = [(-1) ** k for k in range(600)]
+    plain = modes(StrikerPartner(0.05), outcomes)
+    assert modes(StrikerPartner(0.05, lapse=0.0), outcomes) == plain  # the same stream
+    lapsing = modes(StrikerPartner(0.05, lapse=0.3), outcomes)
+    follows = [NEXT_MODE[(prev if k == 0 else prev[0], o)] == nxt[0]
+               for k, (prev, nxt, o) in enumerate(zip(lapsing, lapsing[1:], outcomes))]
+    # A lapse draws uniformly, so the table's mode still comes 1/3 of the time: 0.7 + 0.1.
+    assert 0.72 < np.mean(follows) < 0.88
+    always = modes(StrikerPartner(0.0, lapse=1.0), outcomes)
+    counts = np.bincount([m if k == 0 else m[0] for k, m in enumerate(always)], minlength=3)
+    assert counts.min() > 150
+
+
 def test_checkers_and_render() -> None:
     gym_check_env(AirHockeyEnv(), skip_render_check=True)
     check_env(gym.make("lili/AirHockey-v0"))
+    check_env(gym.make("lili/AirHockey-v0", lapse=0.1, aim_noise=0.03))
     env = AirHockeyEnv(render_mode="rgb_array")
     env.reset(seed=0)
     a = env.render()
@@ -157,6 +183,8 @@ def test_bad_kwargs(kwargs, match) -> None:
     ({"aim_noise": float("nan")}, "aim_noise=nan"),
     ({"aim_noise": True}, "aim_noise=True"),
     ({"aim_noise": "0.1"}, "aim_noise='0.1'"),
+    ({"lapse": 1.5}, "lapse=1.5 is invalid; allowed: a probability in \\[0, 1\\]"),
+    ({"lapse": True}, "lapse=True"),
 ])
 def test_more_bad_kwargs(kwargs, match) -> None:
     with pytest.raises(ValueError, match=match):

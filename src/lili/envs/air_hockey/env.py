@@ -184,18 +184,28 @@ def _check_aim_noise(aim_noise: Any) -> float:
     return float(aim_noise)
 
 
+def _check_lapse(lapse: Any) -> float:
+    if (isinstance(lapse, bool) or not isinstance(lapse, (int, float, np.integer, np.floating))
+            or not np.isfinite(lapse) or not 0 <= lapse <= 1):
+        raise ValueError(f"lapse={lapse!r} is invalid; allowed: a probability in [0, 1]")
+    return float(lapse)
+
+
 class StrikerPartner:
     """The striker: three modes switched by the appendix's table, plus per-shot aim noise.
 
     ``mode`` is 0 (left), 1 (middle) or 2 (right); ``aim_offset`` is the next shot's angular
     error in radians, drawn from N(0, ``aim_noise``) with the partner's generator whenever a
-    mode is chosen (so that ``reset(seed)`` replays every shot).
+    mode is chosen (so that ``reset(seed)`` replays every shot). With probability ``lapse`` the
+    next mode ignores the table and is drawn uniformly (a noisier striker, like the play page's
+    human-like bot; 0, the default, is the appendix's striker).
     """
 
     strategy_space = spaces.Box(0.0, 1.0, shape=(3,), dtype=np.float32)
 
-    def __init__(self, aim_noise: float = 0.01) -> None:
+    def __init__(self, aim_noise: float = 0.01, lapse: float = 0.0) -> None:
         self.aim_noise = _check_aim_noise(aim_noise)
+        self.lapse = _check_lapse(lapse)
         self.mode = MIDDLE
         self.aim_offset = 0.0
 
@@ -220,6 +230,13 @@ class StrikerPartner:
         if outcome not in (-1, 1):
             raise ValueError(f"outcome={outcome!r} is invalid; allowed: -1 (left) or +1 (right)")
         self.mode = NEXT_MODE[(self.mode, int(outcome))]
+        if self.lapse > 0:
+            # Drawn only when lapses are on, so that lapse=0 replays the appendix's striker's
+            # stream (and every run made before the option) exactly; both draws every time,
+            # so that the outcome never shifts the stream.
+            lapsed, pick = rng.random() < self.lapse, int(rng.integers(0, 3))
+            if lapsed:
+                self.mode = pick
         self._draw_noise(rng)
 
 
@@ -231,6 +248,9 @@ class AirHockeyEnv(RepeatedInteractionEnv):
             (0.01 rad, the default, is about 1.5 cm at the ego's line; 0.02 restores the game
             before issue 14, see "What influence is worth" in the module docs).
         bank_shots: left and right shots bounce off a side wall (True) or go straight (False).
+        lapse: probability in [0, 1] that the striker's next mode ignores the table and is
+            drawn uniformly (0, the default, is the appendix's striker; the play page's bot
+            lapses 0.1).
         render_mode: None or ``"rgb_array"`` (a top view, 240 x 440, drawn headless with EGL;
             about 6 ms a frame with software EGL on an idle core).
     """
@@ -243,12 +263,13 @@ class AirHockeyEnv(RepeatedInteractionEnv):
         aim_noise: float = 0.01,
         bank_shots: bool = True,
         render_mode: str | None = None,
+        lapse: float = 0.0,
     ) -> None:
         super().__init__(render_mode)
         if not isinstance(bank_shots, (bool, np.bool_)):
             raise ValueError(f"bank_shots={bank_shots!r} is invalid; allowed: True or False")
         self.bank_shots = bool(bank_shots)
-        self.partner = StrikerPartner(aim_noise)
+        self.partner = StrikerPartner(aim_noise, lapse)
         self.horizon = HORIZON
         self.model = mujoco.MjModel.from_xml_path(str(XML_PATH))
         self.data = mujoco.MjData(self.model)
