@@ -147,7 +147,8 @@ def test_lapses_leave_the_table_and_lapse_zero_is_the_appendix_striker() -> None
     assert modes(StrikerPartner(0.05, lapse=0.0), outcomes) == plain  # the same stream
     lapsing = modes(StrikerPartner(0.05, lapse=0.3), outcomes)
     follows = [NEXT_MODE[(prev if k == 0 else prev[0], o)] == nxt[0]
-               for k, (prev, nxt, o) in enumerate(zip(lapsing, lapsing[1:], outcomes))]
+               for k, (prev, nxt, o) in enumerate(zip(lapsing[:-1], lapsing[1:], outcomes,
+                                                      strict=True))]
     # A lapse draws uniformly, so the table's mode still comes 1/3 of the time: 0.7 + 0.1.
     assert 0.72 < np.mean(follows) < 0.88
     always = modes(StrikerPartner(0.0, lapse=1.0), outcomes)
