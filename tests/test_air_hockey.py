@@ -184,7 +184,7 @@ def test_bad_kwargs(kwargs, match) -> None:
     ({"aim_noise": float("nan")}, "aim_noise=nan"),
     ({"aim_noise": True}, "aim_noise=True"),
     ({"aim_noise": "0.1"}, "aim_noise='0.1'"),
-    ({"lapse": 1.5}, "lapse=1.5 is invalid; allowed: a probability in \\[0, 1\\]"),
+    ({"lapse": 1.5}, "lapse=1.5 is invalid; allowed: a number in \\[0, 1\\]"),
     ({"lapse": True}, "lapse=True"),
 ])
 def test_more_bad_kwargs(kwargs, match) -> None:

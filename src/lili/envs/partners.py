@@ -9,10 +9,11 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Hashable
+from typing import Any
 
 import numpy as np
 
-__all__ = ["MajorityHistory", "noisy_step", "check_partner_options"]
+__all__ = ["MajorityHistory", "noisy_step", "check_partner_options", "check_probability"]
 
 
 def check_partner_options(step_noise: float, history: int) -> None:
@@ -23,6 +24,14 @@ def check_partner_options(step_noise: float, history: int) -> None:
         raise ValueError(f"step_noise={step_noise!r} is invalid; allowed: a finite number >= 0")
     if isinstance(history, bool) or not isinstance(history, (int, np.integer)) or history < 1:
         raise ValueError(f"history={history!r} is invalid; allowed: an integer >= 1")
+
+
+def check_probability(value: Any, name: str) -> float:
+    """Validate a probability in [0, 1]; raise ``ValueError`` naming the value."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
+            or not 0.0 <= float(value) <= 1.0:
+        raise ValueError(f"{name}={value!r} is invalid; allowed: a number in [0, 1]")
+    return float(value)
 
 
 class MajorityHistory:

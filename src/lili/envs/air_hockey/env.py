@@ -94,6 +94,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import mujoco  # noqa: E402 - must follow the MUJOCO_GL default above
 
 from lili.envs.core import RepeatedInteractionEnv  # noqa: E402
+from lili.envs.partners import check_probability  # noqa: E402
 
 __all__ = [
     "AirHockeyEnv",
@@ -184,13 +185,6 @@ def _check_aim_noise(aim_noise: Any) -> float:
     return float(aim_noise)
 
 
-def _check_lapse(lapse: Any) -> float:
-    if (isinstance(lapse, bool) or not isinstance(lapse, (int, float, np.integer, np.floating))
-            or not np.isfinite(lapse) or not 0 <= lapse <= 1):
-        raise ValueError(f"lapse={lapse!r} is invalid; allowed: a probability in [0, 1]")
-    return float(lapse)
-
-
 class StrikerPartner:
     """The striker: three modes switched by the appendix's table, plus per-shot aim noise.
 
@@ -205,7 +199,7 @@ class StrikerPartner:
 
     def __init__(self, aim_noise: float = 0.01, lapse: float = 0.0) -> None:
         self.aim_noise = _check_aim_noise(aim_noise)
-        self.lapse = _check_lapse(lapse)
+        self.lapse = check_probability(lapse, "lapse")
         self.mode = MIDDLE
         self.aim_offset = 0.0
 

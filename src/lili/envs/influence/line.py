@@ -14,6 +14,7 @@ import numpy as np
 from gymnasium import spaces
 
 from lili.envs.core import RepeatedInteractionEnv
+from lili.envs.partners import check_probability
 
 __all__ = ["LineEnv", "check_horizon", "check_probability", "move_to"]
 
@@ -23,14 +24,6 @@ def check_horizon(horizon: Any, low: int) -> int:
     if isinstance(horizon, bool) or not isinstance(horizon, (int, np.integer)) or horizon < low:
         raise ValueError(f"horizon={horizon!r} is invalid; allowed: an integer >= {low}")
     return int(horizon)
-
-
-def check_probability(value: Any, name: str) -> float:
-    """Validate a probability in [0, 1]; raise ``ValueError`` naming the value."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not 0.0 <= float(value) <= 1.0:
-        raise ValueError(f"{name}={value!r} is invalid; allowed: a number in [0, 1]")
-    return float(value)
 
 
 def move_to(x: float, target: float, speed: float) -> np.ndarray:
