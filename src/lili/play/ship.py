@@ -96,12 +96,12 @@ def copy_from_run(run: str | Path, out: str | Path) -> tuple[Path, dict[str, Any
                          "must stay under 5 MiB")
     Path(out).parent.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(path, out)
+    env_kwargs = cfg.get("env_kwargs") or {}
     meta = {"algo": cfg["algo"], "interactions": done, "seed": cfg["seed"],
-            "env_kwargs": cfg.get("env_kwargs") or {}, "config": cfg["agent"],
+            "env_kwargs": env_kwargs, "config": cfg["agent"],
             "trained_by": f"lili train lili/AirHockey-v0 --algo {cfg['algo']} --seed "
                           f"{cfg['seed']} --interactions {done}"
-                          + "".join(f" --env-kwarg {k}={v}"
-                                    for k, v in (cfg.get("env_kwargs") or {}).items()),
+                          + "".join(f" --env-kwarg {k}={v}" for k, v in env_kwargs.items()),
             "from_run": str(run)}
     return Path(out), meta
 
