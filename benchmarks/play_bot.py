@@ -31,12 +31,13 @@ from lili.play.policy import Blocker, ScriptedBlocker, agent_file_for_run, make_
 from lili.play.striker import MODE_NAMES, BotConfig
 
 RESULTS = Path(__file__).resolve().parent / "results"
+SCRIPTED = "scripted:"
 
 
 def score_run(run: str, shots: int, sessions: int, config: BotConfig) -> dict:
-    if run.startswith("scripted:"):
+    if run.startswith(SCRIPTED):
         env_kwargs: dict = {}
-        blocker = ScriptedBlocker(run.split(":", 1)[1])
+        blocker = ScriptedBlocker(run.removeprefix(SCRIPTED))
     else:
         path, cfg = agent_file_for_run(run)
         env_kwargs = dict(cfg.get("env_kwargs") or {})
@@ -61,13 +62,16 @@ def main() -> None:
     p.add_argument("--lapse", type=float, default=BotConfig.lapse)
     p.add_argument("--name", default="play_bot", help="results file name (without .json)")
     args = p.parse_args()
+    if not args.name or Path(args.name).name != args.name or args.name.startswith("."):
+        p.error(f"--name {args.name!r} is invalid; allowed: a plain file name (it is written "
+                f"under {RESULTS})")
     config = BotConfig(aim_noise=args.aim_noise, lapse=args.lapse)
     rows, out = [], []
     for group in args.groups:
         if "=" not in group:
             p.error(f"{group!r} is invalid; allowed: LABEL=RUN_GLOB")
         label, pattern = group.split("=", 1)
-        runs = [pattern] if pattern.startswith("scripted:") else sorted(glob.glob(pattern))
+        runs = [pattern] if pattern.startswith(SCRIPTED) else sorted(glob.glob(pattern))
         if not runs:
             p.error(f"{pattern!r} matches no run folder")
         scores = [score_run(r, args.shots, args.sessions, config) for r in runs]

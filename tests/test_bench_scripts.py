@@ -29,3 +29,12 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
     path.write_text("[1, 2]")
     with pytest.raises(SystemExit, match="--merge: .* is not a report of this script"):
         merged(path, {})
+
+
+@pytest.mark.parametrize("name", ["../x", "/tmp/x", ".hidden", ""])
+def test_play_bot_name_must_be_a_plain_file_name(name: str, monkeypatch, capsys) -> None:
+    play_bot = _script("play_bot")
+    monkeypatch.setattr("sys.argv", ["play_bot.py", "a=scripted:greedy", "--name", name])
+    with pytest.raises(SystemExit):
+        play_bot.main()
+    assert f"--name {name!r} is invalid; allowed: a plain file name" in capsys.readouterr().err
