@@ -119,21 +119,55 @@ def _fake_run(spec, rows: int, summary: int | None) -> None:
         (spec.run_dir / "summary.json").write_text(f'{{"interactions": {summary}}}')
 
 
+def _fake_finished_run(spec, k: int) -> None:
+    """A finished 6-interaction run with the columns `lili train` writes; returns fall with k."""
+    _fake_run(spec, 6, 6)
+    columns = ("interaction,return,length,success,strategy_0,strategy_1,strategy_id,critic_loss,"
+               "actor_loss,alpha,rep_loss,q,entropy,wall_time")
+    (spec.run_dir / "metrics.csv").write_text(columns + "\n" + "".join(
+        f"{i},{-1 - k - 0.1 * i},50,,0.5,0.5,-1,0.1,0.1,0.1,0.1,0.1,0.1,{i}\n" for i in range(6)))
+
+
 def test_a_table_report_keeps_its_variants_apart(tmp_path: Path) -> None:
     # Every sigma holds the same (env, algo, seed) under other env kwargs; one find_runs over
     # all of them refused them as duplicate seeds, so no noise or history table was written.
-    columns = ("interaction,return,length,success,strategy_0,strategy_1,strategy_id,critic_loss,"
-               "actor_loss,alpha,rep_loss,q,entropy,wall_time")
     for k, spec in enumerate(plan(get_preset("noise"), tmp_path, quick=True)):
-        _fake_run(spec, 6, 6)
-        (spec.run_dir / "metrics.csv").write_text(columns + "\n" + "".join(
-            f"{i},{-1 - k - 0.1 * i},50,,0.5,0.5,-1,0.1,0.1,0.1,0.1,0.1,0.1,{i}\n"
-            for i in range(6)))
+        _fake_finished_run(spec, k)
     assert main(["reproduce", "noise", "--quick", "--out", str(tmp_path), "--no-progress"]) == 0
     report = tmp_path / "noise" / "report"
     assert (report / "variants.png").exists()
     assert (report / "curves" / "noise_sigma_0.4" / "results.md").exists()
     assert "0.4" in (report / "results.md").read_text()
+
+
+def test_report_only_writes_an_interim_table_and_starts_nothing(tmp_path: Path,
+                                                                 capsys) -> None:
+    specs = plan(get_preset("noise"), tmp_path, quick=True)
+    finished = specs[::2]
+    for k, spec in enumerate(finished):
+        _fake_finished_run(spec, k)
+    _fake_run(specs[1], 3, None)  # half-way: left as it is
+    before = _snapshot(tmp_path)
+    assert main(["reproduce", "noise", "--quick", "--out", str(tmp_path), "--report-only"]) == 0
+    assert f"interim report from {len(finished)} of {len(specs)} runs" in capsys.readouterr().out
+    text = (tmp_path / "noise" / "report" / "results.md").read_text()
+    assert f"Interim report: {len(finished)} of {len(specs)} runs finished" in text
+    after = _snapshot(tmp_path)
+    assert {k: v for k, v in after.items() if k in before} == before  # no run touched
+    assert all("/report/" in k for k in set(after) - set(before))
+    assert not any(s.run_dir.exists() for s in specs if s not in finished and s != specs[1])
+
+
+@pytest.mark.parametrize(("extra", "message"), [
+    (["--dry-run"], "--dry-run and --report-only are invalid together"),
+    ([], "--report-only: no run of preset 'noise' is finished under"),
+])
+def test_report_only_bad_input(tmp_path: Path, capsys, extra, message) -> None:
+    argv = ["reproduce", "noise", "--quick", "--report-only", "--out", str(tmp_path / "o")]
+    assert main(argv + extra) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("lili: error: ") and message in err
+    assert not (tmp_path / "o").exists()
 
 
 def test_run_status_new_resume_done(tmp_path: Path) -> None:

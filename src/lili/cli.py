@@ -230,7 +230,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     reproduce(args.name, out=args.out or ("runs/reproduce-quick" if args.quick
                                           else "runs/reproduce"),
               seeds=args.seeds, interactions=args.interactions, jobs=args.jobs, ray=args.ray,
-              quick=args.quick, dry_run=args.dry_run,
+              quick=args.quick, dry_run=args.dry_run, report_only=args.report_only,
               algos=tuple(args.algos) if args.algos else None,
               envs=tuple(args.envs) if args.envs else None,
               progress=False if args.no_progress else None,
@@ -309,6 +309,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="agent-config field for every run, e.g. gamma=0.999 (repeatable; an "
                         "ablation: give it its own --out)")
     x.add_argument("--dry-run", action="store_true", help="list the runs and the CPU-hours")
+    x.add_argument("--report-only", action="store_true",
+                   help="start nothing; write an interim report from the finished runs")
     x.add_argument("--no-progress", action="store_true", help="plain lines, no bars")
     x.set_defaults(func=cmd_reproduce)
 

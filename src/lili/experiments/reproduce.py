@@ -69,12 +69,14 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
               ray: str | None = None, quick: bool = False, dry_run: bool = False,
               algos: tuple[str, ...] | None = None, progress: bool | None = None,
               overrides: dict[str, Any] | None = None, envs: tuple[str, ...] | None = None,
+              report_only: bool = False,
               say: Callable[[str], None] = print) -> dict[str, Any]:
     """Run preset ``name`` into ``out`` and write ``out/<name>/report/``; see the module doc.
 
     ``ray``: None (local processes), ``"local"`` (start Ray on this machine) or a cluster
     address. ``overrides``: agent-config fields set in every run, ``algos`` / ``envs``: only
-    those of the preset (:func:`plan`). Every value
+    those of the preset (:func:`plan`). ``report_only``: start nothing and write an interim
+    report from the runs that are finished (a long sweep's table so far). Every value
     is checked and every existing run folder compared with the run it
     would become before anything is written; a bad one raises ValueError naming it. Runs that
     fail are listed (with their logs) in a ValueError after the others have finished.
@@ -87,8 +89,12 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     specs = plan(preset, out, seeds=seeds, interactions=interactions, algos=algos, quick=quick,
                  overrides=overrides, envs=envs)
     status = {s: run_status(s) for s in specs}
+    if dry_run and report_only:
+        raise ValueError("--dry-run and --report-only are invalid together; allowed: one of them")
     if dry_run:
         return _dry_run(name, specs, status, jobs or LOCAL_JOBS, say)
+    if report_only:
+        return _report_only(name, preset, specs, status, out, say)
     if ray is not None:
         _check_ray_importable()
     todo = [s for s in specs if status[s] != "done"]
@@ -110,6 +116,22 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     say(report["markdown"])
     say(f"report: {report['dir']} ({time.time() - t0:.0f} s)")
     return {"runs": len(specs), "ran": len(todo), "report": report}
+
+
+def _report_only(name: str, preset, specs: list[RunSpec], status: dict[RunSpec, str],
+                 out: Path, say: Callable[[str], None]) -> dict[str, Any]:
+    from lili.experiments.results import write_preset_report
+
+    done = [s for s in specs if status[s] == "done"]
+    if not done:
+        raise ValueError(f"--report-only: no run of preset {name!r} is finished under {out}; "
+                         f"allowed: an --out that holds finished runs of it")
+    say(f"{name}: interim report from {len(done)} of {len(specs)} runs (the rest are not "
+        f"finished; nothing is started)")
+    report = write_preset_report(preset, done, out, planned=specs)
+    say(report["markdown"])
+    say(f"report: {report['dir']}")
+    return {"runs": len(specs), "ran": 0, "report": report}
 
 
 def _run_all(backend, todo: list[RunSpec], done: int,

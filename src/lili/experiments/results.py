@@ -16,10 +16,14 @@ from lili.runs import check_out_dir
 __all__ = ["write_preset_report"]
 
 
-def _header(preset: Preset, specs: list[RunSpec]) -> str:
+def _header(preset: Preset, specs: list[RunSpec], of: int | None = None) -> str:
     budget = max(s.interactions for s in specs)
     seeds = len({s.seed for s in specs})
-    return (f"## {preset.title} (`lili reproduce {preset.name}`)\n\nPaper: {preset.where}. "
+    interim = ("" if of is None or of == len(specs) else
+               f"**Interim report: {len(specs)} of {of} runs finished** (`--report-only`); "
+               "the seeds column counts each row's. ")
+    return (f"## {preset.title} (`lili reproduce {preset.name}`)\n\n{interim}"
+            f"Paper: {preset.where}. "
             f"Ours: {seeds} seed{'s' * (seeds > 1)}, {budget} interactions per run; "
             f"{preset.metric}.\n\n")
 
@@ -53,8 +57,13 @@ def _table_report(preset: Preset, specs: list[RunSpec], out: Path) -> dict[str, 
     return {"rows": rows, "markdown": markdown, "files": files}
 
 
-def write_preset_report(preset: Preset, specs: list[RunSpec], out: Path) -> dict[str, Any]:
-    """Write ``out/<preset>/report/`` (and each part's report for ``paper``); return it."""
+def write_preset_report(preset: Preset, specs: list[RunSpec], out: Path,
+                        planned: list[RunSpec] | None = None) -> dict[str, Any]:
+    """Write ``out/<preset>/report/`` (and each part's report for ``paper``); return it.
+
+    ``planned``: every run of the preset, when ``specs`` are only the finished ones (an
+    interim report says so in its header).
+    """
     report_dir = check_out_dir(out / preset.name / "report")
     parts = [PRESETS[n] for n in preset.includes] or [preset]
     sections, payload = [], {}
@@ -73,7 +82,8 @@ def write_preset_report(preset: Preset, specs: list[RunSpec], out: Path) -> dict
             result = write_report([s.run_dir for s in mine], part_dir,
                                   upto=min(s.interactions for s in mine))
             payload[part.name] = {"summary": result["summary"], "files": result["files"]}
-        text = _header(part, mine) + result["markdown"]
+        of = None if planned is None else sum(s.preset == part.name for s in planned)
+        text = _header(part, mine, of) + result["markdown"]
         (part_dir / "results.md").write_text(text, encoding="utf-8")
         rel = Path("..") / ".." / part.name / "report" if part is not preset else Path(".")
         figures = [f"![{name}]({rel / name})" for name in result["files"]
