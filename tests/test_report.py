@@ -180,7 +180,7 @@ def test_summarize_single_seed_and_missing_baselines(tmp_path: Path) -> None:
     row = _row(summary, PM, "lili")
     assert row["n"] == 1 and row["return_se"] == 0.0
     assert row["gap_closed"] is None  # no Oracle run
-    assert "| LILI | 1 | -0.50 ± 0.00 | — | — | -0.72 (gap 0.96) |" in markdown_table(summary)
+    assert "| LILI | 1 | -0.50 | — | — | -0.72 (gap 0.96) |" in markdown_table(summary)  # no s.e.
 
 
 def test_markdown_table(runs_dir: Path) -> None:

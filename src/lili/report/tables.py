@@ -12,13 +12,22 @@ from lili.report.style import algo_label, env_title
 __all__ = ["markdown_table", "fmt_mean_se", "fmt_duration"]
 
 
-def fmt_mean_se(value: float | None, se: float | None, spec: str = ".2f", pct: bool = False) -> str:
-    """``-1.00 ± 0.29`` (or a percentage), ``—`` when there is no value."""
+def fmt_mean_se(value: float | None, se: float | None, spec: str = ".2f", pct: bool = False,
+                n: int | None = None) -> str:
+    """``-1.00 ± 0.29`` (or a percentage), ``—`` when there is no value.
+
+    The value alone when ``se`` is None or it is the mean of ``n`` = 1 seed: one seed has no
+    standard error, and "± 0.00" would read as a spread measured to be zero.
+    """
     if value is None:
         return "—"
     if pct:
-        return f"{100 * value:.1f}% ± {100 * (se or 0.0):.1f}%"
-    return f"{value:{spec}} ± {(se or 0.0):{spec}}"
+        text = f"{100 * value:.1f}%"
+        spread = f" ± {100 * (se or 0.0):.1f}%"
+    else:
+        text = f"{value:{spec}}"
+        spread = f" ± {(se or 0.0):{spec}}"
+    return text if se is None or n == 1 else text + spread
 
 
 def fmt_duration(seconds: float | None) -> str:
@@ -70,8 +79,8 @@ def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
                 seeds += f" ({interactions}/{row['budget']} int.)"
             lines.append(
                 f"| {algo_label(row['algo'])} | {seeds} "
-                f"| {fmt_mean_se(row['return_mean'], row['return_se'])} "
-                f"| {fmt_mean_se(row['success_mean'], row['success_se'], pct=True)} "
+                f"| {fmt_mean_se(row['return_mean'], row['return_se'], n=row['n'])} "
+                f"| {fmt_mean_se(row['success_mean'], row['success_se'], pct=True, n=row['n'])} "
                 f"| {gap} | {paper} | {fmt_duration(row.get('wall_time_mean'))} |"
             )
         ref = paper_reference(env) or {}

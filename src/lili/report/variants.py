@@ -68,7 +68,7 @@ def variant_markdown(rows: Sequence[dict[str, Any]], table: str, bounds_from: st
     for r in rows:
         value = "—" if r["value"] is None else f"{r['value']:g}"
         lines.append(f"| {value} | {algo_label(r['algo'])} | {r['n']} "
-                     f"| {fmt_mean_se(r['return_mean'], r['return_se'])} "
+                     f"| {fmt_mean_se(r['return_mean'], r['return_se'], n=r['n'])} "
                      f"| {fmt_mean_se(r['paper_mean'], r['paper_se'], '.4g')} |")
     lines += ["", f"Paper: {ref['source']}. Bounds: {ref['bounds_note']}; ours are {bounds_from}.",
               "Final = mean over the last 10% of interactions per seed; s.e. over seeds."]
