@@ -22,15 +22,14 @@ from __future__ import annotations
 import argparse
 import glob
 import json
-from pathlib import Path
 
 import numpy as np
+from _results import RESULTS, check_result_name
 
 from lili.play.bot import PAPER_HUMAN, run_bot
 from lili.play.policy import Blocker, ScriptedBlocker, agent_file_for_run, make_play_env
 from lili.play.striker import MODE_NAMES, BotConfig
 
-RESULTS = Path(__file__).resolve().parent / "results"
 SCRIPTED = "scripted:"
 
 
@@ -62,9 +61,7 @@ def main() -> None:
     p.add_argument("--lapse", type=float, default=BotConfig.lapse)
     p.add_argument("--name", default="play_bot", help="results file name (without .json)")
     args = p.parse_args()
-    if not args.name or Path(args.name).name != args.name or args.name.startswith("."):
-        p.error(f"--name {args.name!r} is invalid; allowed: a plain file name (it is written "
-                f"under {RESULTS})")
+    check_result_name(p, args.name)
     config = BotConfig(aim_noise=args.aim_noise, lapse=args.lapse)
     rows, out = [], []
     for group in args.groups:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -12,6 +13,8 @@ BENCH = Path(__file__).resolve().parent.parent / "benchmarks"
 
 
 def _script(name: str):
+    if str(BENCH) not in sys.path:  # the scripts import their helpers (_results) as siblings
+        sys.path.insert(0, str(BENCH))
     spec = importlib.util.spec_from_file_location(f"bench_{name}", BENCH / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -38,3 +41,18 @@ def test_play_bot_name_must_be_a_plain_file_name(name: str, monkeypatch, capsys)
     with pytest.raises(SystemExit):
         play_bot.main()
     assert f"--name {name!r} is invalid; allowed: a plain file name" in capsys.readouterr().err
+
+
+def test_success_by_strategy_script_on_a_real_run_record(tmp_path: Path, monkeypatch,
+                                                         capsys) -> None:
+    script = _script("success_by_strategy")
+    monkeypatch.setattr(script, "RESULTS", tmp_path)
+    run = BENCH / "results/runs/s13/air-hockey-rerun/AirHockey-v0/lili/seed_1"
+    monkeypatch.setattr("sys.argv", ["x", str(run), "--window", "1000", "--name", "s"])
+    script.main()
+    # Seed 1 of the default game never blocks a left shot, though 350+ are fired in its first
+    # 1000 interactions, and blocks nearly every middle one.
+    (row,) = json.loads((tmp_path / "s.json").read_text())["runs"]
+    (left, middle, _), _ = row["counts"]
+    assert left[0] == 0 and left[1] > 300 and middle[0] / middle[1] > 0.95
+    assert "left / middle / right" in capsys.readouterr().out

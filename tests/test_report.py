@@ -459,3 +459,18 @@ def test_heatmap_title_fits_the_figure(runs_dir: Path) -> None:
         box = fig._suptitle.get_window_extent()
         width = fig.get_size_inches()[0] * fig.dpi
         assert box.x0 >= 0 and box.x1 <= width, (box, width)
+
+
+def test_success_by_strategy_counts_each_window(tmp_path: Path) -> None:
+    from lili.report.files import load_run
+    from lili.report.stats import success_by_strategy
+
+    run = load_run(_write_run(tmp_path, DR, "lili", 0))  # ids alternate; the last 10 succeed
+    counts = success_by_strategy(run, 50)
+    assert counts.tolist() == [[[0, 25], [0, 25]], [[5, 25], [5, 25]]]
+    assert success_by_strategy(run, 30)[-1].tolist() == [[5, 5], [5, 5]]  # the short last one
+    with pytest.raises(ValueError, match="window=0 is invalid; allowed: an integer >= 1"):
+        success_by_strategy(run, 0)
+    point_mass = load_run(_write_run(tmp_path, PM, "lili", 0))  # no discrete strategy
+    with pytest.raises(ValueError, match="no strategy_id and success columns to count"):
+        success_by_strategy(point_mass, 50)

@@ -13,7 +13,8 @@ from lili.report.paper import paper_reference
 from lili.report.style import algo_sort_key, env_sort_key
 
 __all__ = ["final_performance", "mean_se", "summarize", "group_runs", "moving_average",
-           "strategy_frequencies", "strategy_names", "STRATEGY_WINDOW", "gap_closed"]
+           "strategy_frequencies", "success_by_strategy", "strategy_names", "STRATEGY_WINDOW",
+           "gap_closed"]
 
 STRATEGY_WINDOW = 200
 
@@ -174,6 +175,31 @@ def strategy_frequencies(runs: Iterable[Run], last: int = STRATEGY_WINDOW) -> np
     for c in counts:
         total[: len(c)] += c
     return total / total.sum()
+
+
+def success_by_strategy(run: Run, window: int) -> np.ndarray:
+    """Successes and interactions per (window, strategy): shape (windows, strategies, 2).
+
+    Window k holds interactions ``k * window`` to ``(k + 1) * window - 1`` (the last may be
+    shorter); strategies are indexed by ``strategy_id``. In air hockey this is blocks per
+    striker mode over training: it shows a mode the blocker never learns to block even when
+    that mode is fired at it.
+    """
+    if isinstance(window, bool) or not isinstance(window, int) or window < 1:
+        raise ValueError(f"window={window!r} is invalid; allowed: an integer >= 1")
+    ids, success = run.metrics.get("strategy_id"), run.metrics.get("success")
+    if ids is None or success is None or not np.any(ids >= 0) \
+            or np.all(np.isnan(success)):
+        raise ValueError(f"{run.path}: no strategy_id and success columns to count; allowed: "
+                         "a run of an env with discrete strategies and a success flag")
+    n_windows = -(-run.n_interactions // window)
+    out = np.zeros((n_windows, int(np.nanmax(ids)) + 1, 2))
+    for k in range(n_windows):
+        part = slice(k * window, (k + 1) * window)
+        for sid, ok in zip(ids[part], success[part], strict=True):
+            if sid >= 0 and not np.isnan(ok):
+                out[k, int(sid)] += (ok, 1)
+    return out
 
 
 def strategy_names(env: str, n: int) -> list[str]:

@@ -1,0 +1,15 @@
+"""Where the benchmark scripts write their JSON, and the check of a ``--name`` for it."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def check_result_name(parser: argparse.ArgumentParser, name: str) -> None:
+    """Refuse a ``--name`` that is not a plain file name (it would write outside results/)."""
+    if not name or Path(name).name != name or name.startswith("."):
+        parser.error(f"--name {name!r} is invalid; allowed: a plain file name (it is written "
+                     f"under {RESULTS})")

@@ -1,0 +1,70 @@
+"""Success per partner strategy over training, from run folders (no training, no checkpoints).
+
+    python benchmarks/success_by_strategy.py RUN_GLOB [RUN_GLOB ...] [--window 400]
+        [--name success_by_strategy]
+
+For every run: its success rate against each of the partner's discrete strategies
+(``strategy_id``) in consecutive windows of ``--window`` interactions. In air hockey that is
+the blocker's block rate per striker mode (left / middle / right) as it trains, which tells a
+mode that is never learned from one that is never fired. Prints a table (``-`` where a window
+holds fewer than 5 interactions of that strategy) and writes
+``benchmarks/results/<--name>.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+
+from _results import RESULTS, check_result_name
+
+from lili.report.files import load_run
+from lili.report.stats import strategy_names, success_by_strategy
+
+MIN_SHOTS = 5
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("runs", nargs="+", metavar="RUN_GLOB")
+    p.add_argument("--window", type=int, default=400)
+    p.add_argument("--name", default="success_by_strategy",
+                   help="results file name (without .json)")
+    args = p.parse_args()
+    if args.window < 1:
+        p.error(f"--window {args.window} is invalid; allowed: an integer >= 1")
+    check_result_name(p, args.name)
+    folders = []
+    for pattern in args.runs:
+        found = sorted(glob.glob(pattern))
+        if not found:
+            p.error(f"{pattern!r} matches no run folder")
+        folders += found
+    out, lines = [], []
+    for folder in folders:
+        run = load_run(folder)
+        try:
+            counts = success_by_strategy(run, args.window)
+        except ValueError as e:
+            p.error(str(e))
+        names = strategy_names(run.env, counts.shape[1])
+        cells = [" / ".join(f"{100 * ok / n:3.0f}" if n >= MIN_SHOTS else "  -"
+                            for ok, n in w) for w in counts]
+        lines.append(f"| {folder} | " + " | ".join(cells) + " |")
+        out.append({"run": folder, "env": run.env, "algo": run.algo, "seed": run.seed,
+                    "strategies": names, "window": args.window, "counts": counts.tolist()})
+    n_windows = max(len(o["counts"]) for o in out)
+    head = [f"{k * args.window}-{(k + 1) * args.window - 1}" for k in range(n_windows)]
+    table = "\n".join([f"success % per strategy ({' / '.join(out[0]['strategies'])}), "
+                       f"windows of {args.window} interactions", "",
+                       "| run | " + " | ".join(head) + " |",
+                       "|---|" + "---|" * n_windows, *lines])
+    print(table)
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / f"{args.name}.json").write_text(json.dumps({"table": table, "runs": out},
+                                                          indent=1))
+
+
+if __name__ == "__main__":
+    main()
