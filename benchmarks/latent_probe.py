@@ -15,8 +15,11 @@ of the time and 70% outside the wall's goal (a return of the partner, 5% of inte
 unknowable from the last interaction, so no latent scores 1 there). The table also gives the
 return per interaction, how often the interaction ended across 0 from g (in Drift what the
 influencer does every time, the greedy response never) and the mean |x_end - g|. No R^2
-("nan") when the partner never changed strategy in the held-out part. Prints a table and
-writes ``benchmarks/results/<--name>.json``.
+("nan") when the partner never changed strategy in the held-out part. Where the env has
+discrete strategies (``info["strategy_id"]``, e.g. air hockey's three modes) a second table
+gives, per strategy, how often the nearest latent names it when it is the one played: a
+strategy the latent does not tell apart scores near 0 there. Prints the tables and writes
+``benchmarks/results/<--name>.json``.
 """
 
 from __future__ import annotations
@@ -49,15 +52,26 @@ def nearest_neighbour(z_fit: np.ndarray, g_fit: np.ndarray, z: np.ndarray,
         float(counts.max() / counts.sum())
 
 
+def recall_per_strategy(z_fit: np.ndarray, id_fit: np.ndarray, z: np.ndarray,
+                        ids: np.ndarray) -> dict[int, tuple[float, int]]:
+    """For each discrete strategy: how often the nearest ``z_fit`` has it when it is the one
+    being played (recall), and how many held-out interactions played it."""
+    d = ((z[:, None, :] - z_fit[None, :, :]) ** 2).sum(-1)
+    guess = id_fit[d.argmin(1)]
+    return {int(m): (float(np.mean(guess[ids == m] == m)), int(np.sum(ids == m)))
+            for m in np.unique(ids)}
+
+
 def probe(run: str, n: int) -> dict:
     """Probe one run (see the module docstring)."""
     path, cfg = agent_file_for_run(run)
     env = load_env_class(cfg["env"])(**cfg.get("env_kwargs", {}))
     episodes = Episodes(load_agent(path, env), env, seed=11)
-    zs, goals, ends, returns = [], [], [], []
+    zs, goals, ids, ends, returns = [], [], [], [], []
     for _ in range(n):
         zs.append(np.asarray(episodes.acting.z, np.float32))
         goals.append(float(episodes.info["strategy"][0]))
+        ids.append(int(episodes.info.get("strategy_id", -1)))
         done = episodes.play()
         returns.append(float(done["ret"]))
         ends.append(float(done["traj"]["next_obs"][-1][0]))  # the line envs observe [x]
@@ -70,7 +84,11 @@ def probe(run: str, n: int) -> dict:
     var = float(np.var(g[k:]))
     r2 = 1.0 - float(np.mean((x[k:] @ w - g[k:]) ** 2)) / var if var > 1e-12 else float("nan")
     knn, knn_rare, base = nearest_neighbour(z[:k], g[:k], z[k:], g[k:])
-    return {"run": run, "algo": cfg["algo"], "interactions_trained": int(cfg["interactions"]),
+    sid = np.asarray(ids)
+    # Discrete strategies (air hockey's modes): whether the latent tells each one apart.
+    recall = recall_per_strategy(z[:k], sid[:k], z[k:], sid[k:]) if np.all(sid >= 0) else {}
+    return {"recall_per_strategy": recall, "run": run, "algo": cfg["algo"],
+            "interactions_trained": int(cfg["interactions"]),
             "probe_r2": r2, "knn": knn, "knn_rare": knn_rare, "base_rate": base,
             "return": float(np.mean(returns)),
             "ends_across": float(np.mean(np.sign(end) != np.sign(g))),
@@ -94,6 +112,17 @@ def main() -> None:
                      f"{r['probe_r2']:.2f} | {r['knn']:.2f} | {r['knn_rare']:.2f} "
                      f"({r['base_rate']:.2f}) | {r['return']:.3f} | {r['ends_across']:.2f} | "
                      f"{r['end_error']:.3f} |")
+    recalls = [r for r in rows if r["recall_per_strategy"]]
+    if recalls:
+        n_ids = 1 + max(max(r["recall_per_strategy"]) for r in recalls)
+        lines += ["", "Discrete strategies: nearest z names the strategy being played "
+                  "(recall per strategy_id, held-out interactions of it in brackets)", "",
+                  "| run | " + " | ".join(f"id {m}" for m in range(n_ids)) + " |",
+                  "|---|" + "---:|" * n_ids]
+        for r in recalls:
+            got = r["recall_per_strategy"]
+            cells = [f"{got[m][0]:.2f} ({got[m][1]})" if m in got else "—" for m in range(n_ids)]
+            lines.append(f"| {r['run']} | " + " | ".join(cells) + " |")
     print("\n".join(lines))
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / f"{args.name}.json").write_text(json.dumps(rows, indent=1))
