@@ -7,6 +7,7 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 BENCH = Path(__file__).resolve().parent.parent / "benchmarks"
@@ -56,3 +57,13 @@ def test_success_by_strategy_script_on_a_real_run_record(tmp_path: Path, monkeyp
     (left, middle, _), _ = row["counts"]
     assert left[0] == 0 and left[1] > 300 and middle[0] / middle[1] > 0.95
     assert "left / middle / right" in capsys.readouterr().out
+
+
+def test_latent_probe_recall_per_strategy() -> None:
+    recall = _script("latent_probe").recall_per_strategy
+    z_fit = np.array([[0.0], [1.0], [2.0]])
+    ids_fit = np.array([0, 1, 2])
+    # Latents near 0 and 1 are told apart; the latent of strategy 2 sits on strategy 1's.
+    z = np.array([[0.1], [0.9], [1.1], [1.0], [1.05]])
+    ids = np.array([0, 1, 1, 2, 2])
+    assert recall(z_fit, ids_fit, z, ids) == {0: (1.0, 1), 1: (1.0, 2), 2: (0.0, 2)}
