@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -13,3 +14,12 @@ def check_result_name(parser: argparse.ArgumentParser, name: str) -> None:
     if not name or Path(name).name != name or name.startswith("."):
         parser.error(f"--name {name!r} is invalid; allowed: a plain file name (it is written "
                      f"under {RESULTS})")
+
+
+def write_result(name: str, table: str, **payload: object) -> Path:
+    """Print ``table`` and write it with ``payload`` to ``results/<name>.json``."""
+    print(table)
+    RESULTS.mkdir(exist_ok=True)
+    path = RESULTS / f"{name}.json"
+    path.write_text(json.dumps({"table": table, **payload}, indent=1))
+    return path

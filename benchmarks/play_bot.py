@@ -21,10 +21,9 @@ from __future__ import annotations
 
 import argparse
 import glob
-import json
 
 import numpy as np
-from _results import RESULTS, check_result_name
+from _results import check_result_name, write_result
 
 from lili.play.bot import PAPER_HUMAN, run_bot
 from lili.play.policy import Blocker, ScriptedBlocker, agent_file_for_run, make_play_env
@@ -88,10 +87,7 @@ def main() -> None:
                        + " | ".join(f"{n} blocked" for n in MODE_NAMES)
                        + " | paper (expert human) |",
                        "|---|---:|---:|" + "---:|" * len(MODE_NAMES) + "---|", *rows])
-    print(table)
-    RESULTS.mkdir(exist_ok=True)
-    (RESULTS / f"{args.name}.json").write_text(json.dumps({"table": table, "groups": out},
-                                                      indent=1))
+    write_result(args.name, table, groups=out)
 
 
 if __name__ == "__main__":

@@ -15,9 +15,8 @@ from __future__ import annotations
 
 import argparse
 import glob
-import json
 
-from _results import RESULTS, check_result_name
+from _results import check_result_name, write_result
 
 from lili.report.files import load_run
 from lili.report.stats import strategy_names, success_by_strategy
@@ -60,10 +59,7 @@ def main() -> None:
                        f"windows of {args.window} interactions", "",
                        "| run | " + " | ".join(head) + " |",
                        "|---|" + "---|" * n_windows, *lines])
-    print(table)
-    RESULTS.mkdir(exist_ok=True)
-    (RESULTS / f"{args.name}.json").write_text(json.dumps({"table": table, "runs": out},
-                                                          indent=1))
+    write_result(args.name, table, runs=out)
 
 
 if __name__ == "__main__":

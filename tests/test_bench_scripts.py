@@ -47,7 +47,7 @@ def test_play_bot_name_must_be_a_plain_file_name(name: str, monkeypatch, capsys)
 def test_success_by_strategy_script_on_a_real_run_record(tmp_path: Path, monkeypatch,
                                                          capsys) -> None:
     script = _script("success_by_strategy")
-    monkeypatch.setattr(script, "RESULTS", tmp_path)
+    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
     run = BENCH / "results/runs/s13/air-hockey-rerun/AirHockey-v0/lili/seed_1"
     monkeypatch.setattr("sys.argv", ["x", str(run), "--window", "1000", "--name", "s"])
     script.main()
