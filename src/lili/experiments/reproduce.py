@@ -110,26 +110,30 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
             raise ValueError(f"{len(failed)} of {len(todo)} runs failed:\n{lines}")
     else:
         say(f"{name}: all {len(specs)} runs are done")
-    from lili.experiments.results import write_preset_report
-
-    report = write_preset_report(preset, specs, out)
-    say(report["markdown"])
+    report = _write_report(preset, specs, out, say)
     say(f"report: {report['dir']} ({time.time() - t0:.0f} s)")
     return {"runs": len(specs), "ran": len(todo), "report": report}
 
 
-def _report_only(name: str, preset, specs: list[RunSpec], status: dict[RunSpec, str],
-                 out: Path, say: Callable[[str], None]) -> dict[str, Any]:
+def _write_report(preset, specs: list[RunSpec], out: Path, say: Callable[[str], None],
+                  planned: list[RunSpec] | None = None) -> dict[str, Any]:
+    """Write the preset's report from ``specs`` and print its markdown."""
     from lili.experiments.results import write_preset_report
 
+    report = write_preset_report(preset, specs, out, planned=planned)
+    say(report["markdown"])
+    return report
+
+
+def _report_only(name: str, preset, specs: list[RunSpec], status: dict[RunSpec, str],
+                 out: Path, say: Callable[[str], None]) -> dict[str, Any]:
     done = [s for s in specs if status[s] == "done"]
     if not done:
         raise ValueError(f"--report-only: no run of preset {name!r} is finished under {out}; "
                          f"allowed: an --out that holds finished runs of it")
     say(f"{name}: interim report from {len(done)} of {len(specs)} runs (the rest are not "
         f"finished; nothing is started)")
-    report = write_preset_report(preset, done, out, planned=specs)
-    say(report["markdown"])
+    report = _write_report(preset, done, out, say, planned=specs)
     say(f"report: {report['dir']}")
     return {"runs": len(specs), "ran": 0, "report": report}
 
