@@ -34,6 +34,7 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from _results import RESULTS, check_result_name
 
 from lili.cli import parse_overrides
 from lili.envs.influence import HELD, SUITE, make_scripted, play
@@ -45,7 +46,6 @@ from lili.report.style import algo_label
 from lili.runs import final_window
 
 ROOT = Path(__file__).resolve().parent.parent
-RESULTS = ROOT / "benchmarks" / "results"
 # Point Mass's greedy target takes a slow random walk round the circle, and Drift's partner
 # returns at random about every 20 interactions: average them out.
 SCRIPTED_BUDGET = {"lili/PointMass-v0": (3000, 2000), "lili/InfluenceDrift-v0": (3000, 2000)}
@@ -153,6 +153,7 @@ def main() -> None:
     p.add_argument("--merge", action="store_true",
                    help="keep the learned rows of results/<--name>.json not recomputed now")
     args = p.parse_args()
+    check_result_name(p, args.name)
     if not 1 <= args.last <= args.scripted:
         p.error(f"--last {args.last} is invalid; allowed: 1 to --scripted ({args.scripted})")
     allowed = get_preset("influence").algos

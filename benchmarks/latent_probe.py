@@ -26,16 +26,19 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
 import numpy as np
+from _results import RESULTS, check_result_name
 
 from lili.agents import load_agent
 from lili.envs.checker import load_env_class
 from lili.evaluate import Episodes
 from lili.play.policy import agent_file_for_run
 
-RESULTS = Path(__file__).resolve().parent / "results"
+
+def nearest_label(z_fit: np.ndarray, labels: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """The label of the nearest ``z_fit`` (squared Euclidean distance) for each row of ``z``."""
+    return labels[((z[:, None, :] - z_fit[None, :, :]) ** 2).sum(-1).argmin(1)]
 
 
 def nearest_neighbour(z_fit: np.ndarray, g_fit: np.ndarray, z: np.ndarray,
@@ -43,8 +46,7 @@ def nearest_neighbour(z_fit: np.ndarray, g_fit: np.ndarray, z: np.ndarray,
     """A nonlinear probe: the share of ``g`` that the strategy of the nearest ``z_fit`` gets
     right, overall and outside the most common strategy, and that strategy's share (what
     always guessing it scores)."""
-    d = ((z[:, None, :] - z_fit[None, :, :]) ** 2).sum(-1)
-    guess = g_fit[d.argmin(1)]
+    guess = nearest_label(z_fit, g_fit, z)
     values, counts = np.unique(g, return_counts=True)
     rare = g != values[counts.argmax()]
     hit = guess == g
@@ -56,8 +58,7 @@ def recall_per_strategy(z_fit: np.ndarray, id_fit: np.ndarray, z: np.ndarray,
                         ids: np.ndarray) -> dict[int, tuple[float, int]]:
     """For each discrete strategy: how often the nearest ``z_fit`` has it when it is the one
     being played (recall), and how many held-out interactions played it."""
-    d = ((z[:, None, :] - z_fit[None, :, :]) ** 2).sum(-1)
-    guess = id_fit[d.argmin(1)]
+    guess = nearest_label(z_fit, id_fit, z)
     return {int(m): (float(np.mean(guess[ids == m] == m)), int(np.sum(ids == m)))
             for m in np.unique(ids)}
 
@@ -101,6 +102,7 @@ def main() -> None:
     ap.add_argument("--interactions", type=int, default=1500)
     ap.add_argument("--name", default="latent_probe", help="results file stem")
     args = ap.parse_args()
+    check_result_name(ap, args.name)
     if args.interactions < 10:
         ap.error(f"--interactions {args.interactions} is invalid; allowed: an integer >= 10")
     rows = [probe(r, args.interactions) for r in args.runs]

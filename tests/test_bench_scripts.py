@@ -35,12 +35,16 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
         merged(path, {})
 
 
+@pytest.mark.parametrize(("script", "args"), [
+    ("play_bot", ["a=scripted:greedy"]), ("latent_probe", ["run"]), ("influence", []),
+    ("success_by_strategy", ["run"])])
 @pytest.mark.parametrize("name", ["../x", "/tmp/x", ".hidden", ""])
-def test_play_bot_name_must_be_a_plain_file_name(name: str, monkeypatch, capsys) -> None:
-    play_bot = _script("play_bot")
-    monkeypatch.setattr("sys.argv", ["play_bot.py", "a=scripted:greedy", "--name", name])
+def test_result_name_must_be_a_plain_file_name(script: str, args: list[str], name: str,
+                                               monkeypatch, capsys) -> None:
+    module = _script(script)
+    monkeypatch.setattr("sys.argv", [f"{script}.py", *args, "--name", name])
     with pytest.raises(SystemExit):
-        play_bot.main()
+        module.main()
     assert f"--name {name!r} is invalid; allowed: a plain file name" in capsys.readouterr().err
 
 
