@@ -71,3 +71,13 @@ def test_latent_probe_recall_per_strategy() -> None:
     z = np.array([[0.1], [0.9], [1.1], [1.0], [1.05]])
     ids = np.array([0, 1, 1, 2, 2])
     assert recall(z_fit, ids_fit, z, ids) == {0: (1.0, 1), 1: (1.0, 2), 2: (0.0, 2)}
+
+
+def test_partner_scripted_turns_back_counts_reversals_of_the_target() -> None:
+    turns_back = _script("partner_scripted").turns_back
+    held = np.array([1.4, 1.6] * 10)  # the influencer's hold at the top: turns every time
+    circling = np.arange(20) * 0.2 + 4.0  # one way round, across the -pi/pi seam
+    swept = np.array([0.0, 0.2, 0.4, 0.2, 0.0, 0.2])  # turns at 0.4 and at 0.0
+    assert turns_back(np.cos(held), np.sin(held)) == 100.0
+    assert turns_back(np.cos(circling), np.sin(circling)) == 0.0
+    assert turns_back(np.cos(swept), np.sin(swept)) == 50.0

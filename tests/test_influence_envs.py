@@ -109,6 +109,20 @@ def test_point_mass_last_interaction_influencer_is_the_influencer_without_noise(
     assert mean_return(LastInteractionInfluencer(), 0.6) < mean_return(influencer, 0.6) - 0.2
 
 
+def test_point_mass_influencer_reading_the_last_n_interactions_is_the_influencer() -> None:
+    """Against the partner that follows the majority of the last N ends, reading the last N
+    interactions predicts the target exactly; reading only the last one does not."""
+    from lili.envs.influence.point_mass import LastInteractionInfluencer, influencer
+    from lili.envs.point_mass import PointMassEnv
+
+    def mean_return(policy) -> float:
+        return play(PointMassEnv(history=5), policy, 120, 3).last(100).mean_return()
+
+    told = mean_return(influencer)
+    assert mean_return(LastInteractionInfluencer(history=5)) == pytest.approx(told, abs=1e-6)
+    assert mean_return(LastInteractionInfluencer()) < told - 0.2
+
+
 def test_drift_rules() -> None:
     env = InfluenceDriftEnv(returns=0.0)
     obs, info = env.reset(seed=0)

@@ -24,7 +24,11 @@ Each is told the target (``info["strategy"]``) except the no-information one:
 interaction predicts (its target moved one noise-free step by the side where the ego ended),
 everything an agent reading only the last interaction (LILI) can know; under the noisy
 partner (``step_noise``) the prediction is off by the noise, and its return is the bound of
-such an agent (``benchmarks/noise_scripted.py``).
+such an agent (``benchmarks/partner_scripted.py --table noise``). With ``history=N`` it reads
+the last N interactions (LILI's encoder in the history experiment) and predicts the partner
+that takes its direction from the majority of the last N outcomes exactly; with ``history=1``
+against such a partner it is an agent that reads one interaction too few
+(``benchmarks/partner_scripted.py --table history``).
 """
 
 from __future__ import annotations
@@ -84,13 +88,14 @@ def no_information(obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
 
 
 class LastInteractionInfluencer:
-    """The influencer told the target the last interaction predicts (see the module docs);
-    before any interaction it plays :func:`no_information`. ``inside_turn`` is the env's rule.
-    Stateful: one instance per rollout."""
+    """The influencer told the target the last ``history`` interactions predict (see the module
+    docs); before any interaction it plays :func:`no_information`. ``inside_turn`` is the env's
+    rule. Stateful: one instance per rollout."""
 
-    def __init__(self, inside_turn: str = "clockwise") -> None:
+    def __init__(self, inside_turn: str = "clockwise", history: int = 1) -> None:
         # The partner's own (noise-free) update predicts the next target: one rule, one place.
-        self.partner = CirclePartner(0.0, 1, inside_turn)
+        # It is kept across interactions, so its vote holds this policy's last `history` ends.
+        self.partner = CirclePartner(0.0, history, inside_turn)
         self.predicted: np.ndarray | None = None
         self.last_target: np.ndarray | None = None
         self.ended_inside = False
