@@ -65,7 +65,6 @@ POLICIES: dict[str, dict[str, Callable]] = {
         "no information": lambda v, seed: no_information,
     },
 }
-ENV_KWARG = {"noise": "step_noise", "history": "history"}
 
 
 def lili_folders(table: str, value: float) -> list[Path]:
@@ -105,7 +104,7 @@ def main() -> None:
     policies, paper = POLICIES[args.table], PAPER_TABLES[args.table]
     rows = []
     for value, (paper_mean, _) in paper["rows"].items():
-        env_kwargs = {ENV_KWARG[args.table]: value}
+        env_kwargs = {paper["parameter"]: value}  # the env kwarg the table varies
         row: dict = {paper["parameter"]: value}
         for name, make in policies.items():
             row[name] = float(np.mean([
