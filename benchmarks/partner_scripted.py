@@ -32,6 +32,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+from _results import RESULTS
 
 from lili.envs.influence.point_mass import (
     GreedyCoin,
@@ -44,9 +45,8 @@ from lili.envs.point_mass import CENTER, PointMassEnv
 from lili.report.files import load_run
 from lili.report.paper import PAPER_TABLES
 from lili.report.stats import mean_se
+from lili.report.tables import fmt_mean_se
 
-ROOT = Path(__file__).resolve().parent.parent
-RESULTS = ROOT / "benchmarks" / "results"
 RUNS = RESULTS / "runs" / "s9"
 TURN_WINDOW = 200
 
@@ -128,8 +128,7 @@ def main() -> None:
         m, se = mean_se(row["lili"])
         n = len(row["lili"])
         cells = [f"{row[name]:.3f}" for name in policies]
-        cells.append("—" if m is None else f"{m:.3f} ± {se:.3f} ({n})" if n > 1
-                     else f"{m:.3f} (1)")
+        cells.append("—" if m is None else f"{fmt_mean_se(m, se, '.3f', n=n)} ({n})")
         if extra:
             cells.append(" / ".join(f"{t:.0f}" for t in row["lili_turns_back"]))
         cells.append(f"{row['paper']:.4g}")
