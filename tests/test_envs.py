@@ -352,3 +352,33 @@ def test_oracle_wrappers_need_the_strategy_in_reset_info(wrapper, who: str) -> N
     with pytest.raises(ValueError, match=f"^{who} needs info\\['strategy'\\] from reset\\(\\); "
                                          "env PointMassEnv gave keys"):
         env.reset(seed=0)
+
+
+def test_last_interaction_observation_tells_the_outcome_when_asked() -> None:
+    # Air hockey's outcome (the side of the paddle where the puck ended) is in no observation.
+    plain = LastInteractionObservation(gym.make("lili/AirHockey-v0"))
+    env = LastInteractionObservation(gym.make("lili/AirHockey-v0"), outcome=True)
+    assert env.observation_space.shape[0] == plain.observation_space.shape[0] + 1
+    obs, _ = env.reset(seed=3)
+    assert obs[-1] == 0.0  # nothing came before a seeded reset
+    outcomes = []
+    for _ in range(6):
+        done, info = False, {}
+        while not done:
+            obs, _, terminated, truncated, info = env.step(env.action_space.sample())
+            done = terminated or truncated
+        assert info["outcome"] in (-1, 1)  # the env reports what the striker reacts to
+        outcomes.append(info["outcome"])
+        obs, _ = env.reset()
+        assert obs[-1] == outcomes[-1]
+    with pytest.raises(ValueError, match="^outcome='yes' is invalid; allowed: True or False"):
+        LastInteractionObservation(gym.make("lili/PointMass-v0"), outcome="yes")
+
+
+def test_last_interaction_outcome_must_be_a_number() -> None:
+    env = LastInteractionObservation(gym.make("lili/LunarLander-v0"), outcome=True)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="needs info\\['outcome'\\] on the last step as one finite "
+                                         "number; env LunarLanderEnv gave array"):
+        for _ in range(200):
+            env.step(np.zeros(env.action_space.shape, np.float32))

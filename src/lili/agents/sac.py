@@ -47,7 +47,7 @@ from lili.agents.base import (
     env_horizon,
 )
 from lili.buffer import Batch, InteractionBuffer, Window, sample
-from lili.config import AgentConfig
+from lili.config import AgentConfig, extra_options
 from lili.dists import tanh_gaussian
 from lili.nets import Actor, TwinCritic
 
@@ -723,6 +723,10 @@ class LastInteractionOracle(Oracle):
     the last interaction) could at best tell LILI's policy, so LILI below it falls short in its
     latent or in learning to use it; it below the Oracle means the last interaction does not
     determine the partner's next strategy or acting on it is harder to learn.
+
+    Option (``AgentConfig.extra["oracle-last"]``): ``outcome`` (default False) also tells it the
+    last interaction's ``info["outcome"]``, what the partner reacted to, where the last
+    observation leaves it out (air hockey's side of the paddle).
     """
 
     algo = "oracle-last"
@@ -730,10 +734,24 @@ class LastInteractionOracle(Oracle):
     def _wrap(self, env: gym.Env) -> gym.Env:
         from lili.envs.wrappers import LastInteractionObservation
 
-        return env if isinstance(env, LastInteractionObservation) \
-            else LastInteractionObservation(env)
+        if isinstance(env, LastInteractionObservation):
+            return env
+        return LastInteractionObservation(env, outcome=_oracle_last_options(self.config)["outcome"])
+
+
+ORACLE_LAST_OPTIONS: dict[str, Any] = {"outcome": False}
+"""Options of the last-interaction Oracle in ``AgentConfig.extra["oracle-last"]``."""
+
+
+def _oracle_last_options(config: AgentConfig) -> dict[str, Any]:
+    opts = extra_options(config, "oracle-last", ORACLE_LAST_OPTIONS, "Oracle (last interaction)")
+    if not isinstance(opts["outcome"], bool):
+        raise ValueError(f"config extra.oracle-last.outcome={opts['outcome']!r} is invalid; "
+                         "allowed: true or false")
+    return opts
 
 
 register("sac", SAC)
 register("oracle", Oracle)
 register("oracle-last", LastInteractionOracle)
+register_options("oracle-last", _oracle_last_options)

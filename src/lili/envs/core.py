@@ -59,7 +59,8 @@ class RepeatedInteractionEnv(gym.Env):
 
     ``info`` on every step and reset carries ``strategy`` (float32 vector), ``strategy_id``
     (where defined; -1 otherwise), ``interaction`` (0-based index) and ``t`` (steps taken in this
-    interaction); the last step of an interaction also carries ``success`` where defined.
+    interaction); the last step of an interaction also carries ``success`` where defined and
+    ``outcome``, what the partner reacts to (``_outcome()``).
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 10}
@@ -134,7 +135,9 @@ class RepeatedInteractionEnv(gym.Env):
             success = self._success()
             if success is not None:
                 info["success"] = bool(success)
-            self.partner.update(self._outcome(), self._partner_rng)
+            outcome = self._outcome()
+            info["outcome"] = outcome
+            self.partner.update(outcome, self._partner_rng)
             self._done = True
         return obs, float(reward), bool(terminated), bool(truncated), info
 

@@ -78,21 +78,32 @@ class LastInteractionObservation(gym.Wrapper):
     its latent. Where it falls short of the Oracle, the last interaction does not determine the
     partner's next strategy or acting on it is harder to learn (in Drift both, see
     ``benchmarks/README.md``, "Drift with a returning partner").
+
+    With ``outcome=True`` it also appends the last interaction's ``info["outcome"]`` (what the
+    partner reacts to, a number), for envs whose last observation leaves it out: in air hockey
+    the side of the paddle where the puck ended, which the blocker never observes. Told the
+    last strategy and outcome, it is told everything the partner's next strategy depends on
+    except the partner's own randomness.
     """
 
-    def __init__(self, env: gym.Env) -> None:
+    def __init__(self, env: gym.Env, outcome: bool = False) -> None:
+        if not isinstance(outcome, bool):
+            raise ValueError(f"outcome={outcome!r} is invalid; allowed: True or False")
         super().__init__(env)
+        self.with_outcome = outcome
         strat = strategy_box(env, "the last-interaction Oracle")
         obs_space, act_space = env.observation_space, env.action_space
         for name, space in (("observation", obs_space), ("action", act_space)):
             if not isinstance(space, spaces.Box) or len(space.shape) != 1:
                 raise ValueError(f"LastInteractionObservation needs a flat Box {name} space; "
                                  f"got {space}")
-        parts = (obs_space, strat, obs_space, act_space)
+        parts = [obs_space, strat, obs_space, act_space]
+        if outcome:
+            parts.append(spaces.Box(-np.inf, np.inf, shape=(1,), dtype=np.float32))
         self.observation_space = spaces.Box(
             np.concatenate([p.low for p in parts]).astype(np.float32),
             np.concatenate([p.high for p in parts]).astype(np.float32), dtype=np.float32)
-        self._sizes = (strat.shape[0], obs_space.shape[0], act_space.shape[0])
+        self._sizes = (strat.shape[0], obs_space.shape[0], act_space.shape[0], int(outcome))
         self._clear()
 
     def _clear(self) -> None:
@@ -100,6 +111,7 @@ class LastInteractionObservation(gym.Wrapper):
         self._strategy = np.zeros(self._sizes[0], np.float32)
         self._obs = np.zeros(self._sizes[1], np.float32)
         self._act = np.zeros(self._sizes[2], np.float32)
+        self._outcome = np.zeros(self._sizes[3], np.float32)
         self._started = False
 
     def reset(self, **kwargs: Any):
@@ -109,7 +121,7 @@ class LastInteractionObservation(gym.Wrapper):
             # A seeded reset starts a new sequence: nothing came before it.
             self._clear()
         else:
-            self._last = np.concatenate([self._strategy, self._obs, self._act])
+            self._last = np.concatenate([self._strategy, self._obs, self._act, self._outcome])
         self._started = True
         self._strategy = strategy
         self._obs = np.asarray(obs, np.float32)
@@ -119,7 +131,23 @@ class LastInteractionObservation(gym.Wrapper):
         obs, reward, terminated, truncated, info = self.env.step(action)
         self._obs = np.asarray(obs, np.float32)
         self._act = np.asarray(action, np.float32).reshape(self._sizes[2])
+        if self.with_outcome and (terminated or truncated):
+            self._outcome = np.array([_scalar_outcome(self.env, info)], np.float32)
         return self._observation(obs), reward, terminated, truncated, info
 
     def _observation(self, observation: np.ndarray) -> np.ndarray:
         return np.concatenate([np.asarray(observation, np.float32), self._last])
+
+
+def _scalar_outcome(env: gym.Env, info: dict[str, Any]) -> float:
+    """The last step's ``info["outcome"]`` as a float, or a ValueError naming what it was."""
+    value = info.get("outcome")
+    if isinstance(value, np.ndarray) and value.size == 1:
+        value = value.item()
+    if not isinstance(value, (bool, int, float, np.bool_, np.integer, np.floating)) \
+            or not np.isfinite(float(value)):
+        raise ValueError(
+            f"the last-interaction Oracle with outcome=True needs info['outcome'] on the last "
+            f"step as one finite number; env {type(env.unwrapped).__name__} gave {value!r}; "
+            "allowed: an env whose outcome is a number (not Lunar Lander's vector)")
+    return float(value)
