@@ -4,7 +4,8 @@
         [--env-kwarg aim_noise=0.02 ...]
 
 Plays the blockers of ``lili.envs.air_hockey.scripted`` (random, middle, crossing, greedy and
-influencer; the last three are told the striker's mode) on ``lili/AirHockey-v0``, prints block
+influencer; the last three are told the striker's mode; and the predictor, told only the last
+shot's mode and side) on ``lili/AirHockey-v0``, prints block
 rate, reward per interaction and the striker's modes over the last ``--last`` interactions of
 each seed (mean over seeds) and the value of influence (influencer minus greedy), and writes
 ``benchmarks/results/air_hockey_scripted{_<kwargs>}.{json,md}``. About 10 s per blocker and
@@ -22,10 +23,22 @@ import numpy as np
 import yaml
 
 from lili.envs.air_hockey import AirHockeyEnv
-from lili.envs.air_hockey.scripted import BLOCKERS, make_blocker
+from lili.envs.air_hockey.scripted import BLOCKERS, PredictingBlocker, make_blocker
 from lili.envs.influence.scripted import play
+from lili.envs.wrappers import LastInteractionObservation
 
 RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def _row(runs: list, seconds: float) -> dict:
+    """One blocker's numbers over its seeds' rollouts."""
+    return {
+        "block_rate": float(np.mean([r.success_rate() for r in runs])),
+        "reward": float(np.mean([r.mean_return() for r in runs])),
+        "reward_per_seed": [r.mean_return() for r in runs],
+        "modes": np.mean([r.strategy_frequencies(3) for r in runs], 0).tolist(),
+        "seconds": seconds,
+    }
 
 
 def scripted_table(interactions: int = 600, seeds: tuple[int, ...] = (0, 1), last: int = 400,
@@ -38,13 +51,13 @@ def scripted_table(interactions: int = 600, seeds: tuple[int, ...] = (0, 1), las
         runs = [play(AirHockeyEnv(**env_kwargs),
                      make_blocker(name, seed, env_kwargs.get("bank_shots", True)),
                      interactions, seed).last(last) for seed in seeds]
-        rows[name] = {
-            "block_rate": float(np.mean([r.success_rate() for r in runs])),
-            "reward": float(np.mean([r.mean_return() for r in runs])),
-            "reward_per_seed": [r.mean_return() for r in runs],
-            "modes": np.mean([r.strategy_frequencies(3) for r in runs], 0).tolist(),
-            "seconds": time.time() - t0,
-        }
+        rows[name] = _row(runs, time.time() - t0)
+    t0 = time.time()
+    # Told only the last shot's mode and side: the ceiling of a blocker reading the past.
+    runs = [play(LastInteractionObservation(AirHockeyEnv(**env_kwargs), outcome=True),
+                 PredictingBlocker(env_kwargs.get("bank_shots", True)), interactions,
+                 seed).last(last) for seed in seeds]
+    rows["predictor"] = _row(runs, time.time() - t0)
     value = rows["influencer"]["reward"] - rows["greedy"]["reward"]
     lines = [f"Air hockey, scripted blockers ({interactions} interactions, seeds "
              f"{', '.join(map(str, seeds))}, last {last} counted; "
@@ -53,7 +66,8 @@ def scripted_table(interactions: int = 600, seeds: tuple[int, ...] = (0, 1), las
              "striker left / middle / right |", "|---|---|---:|---:|---|"]
     for name, row in rows.items():
         modes = " / ".join(f"{100 * f:.0f}" for f in row["modes"])
-        told = "yes" if name in ("crossing", "greedy", "influencer") else "no"
+        told = ("yes" if name in ("crossing", "greedy", "influencer")
+                else "the last one and its side" if name == "predictor" else "no")
         lines.append(f"| {name} | {told} | {100 * row['block_rate']:.1f}% | "
                      f"{row['reward']:.3f} | {modes}% |")
     lines += ["", f"Value of influence (influencer - greedy): {value:+.3f} per interaction "

@@ -319,6 +319,24 @@ def test_the_scripted_influencer_beats_the_greedy_blocker_by_a_tenth() -> None:
     assert freq.max() <= 0.45 and freq.min() >= 0.22, freq
 
 
+def test_the_predictor_told_the_last_mode_and_side_blocks_all_but_the_lapses() -> None:
+    # The striker's next mode is the table's function of the last mode and side, so without
+    # lapses the predictor blocks as the told greedy blocker does (it holds the middle on the
+    # first shot, with nothing to predict from); with lapses it loses about 2/3 of them.
+    from lili.envs.air_hockey.scripted import PredictingBlocker
+    from lili.envs.influence.scripted import play
+    from lili.envs.wrappers import LastInteractionObservation
+
+    def rate(**kwargs) -> float:
+        env = LastInteractionObservation(AirHockeyEnv(**kwargs), outcome=True)
+        return play(env, PredictingBlocker(), 150, seed=1).last(149).success_rate()
+
+    assert rate() >= 0.98
+    assert 0.75 <= rate(lapse=0.3) <= 0.9
+    with pytest.raises(ValueError, match="needs the 9 numbers .* shape \\(2,\\)"):
+        PredictingBlocker()(np.zeros(2, np.float32), {})
+
+
 def test_the_old_game_is_one_kwarg_away() -> None:
     assert AirHockeyEnv().partner.aim_noise == 0.01
     assert AirHockeyEnv(aim_noise=0.02).partner.aim_noise == 0.02

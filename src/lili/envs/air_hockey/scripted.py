@@ -24,6 +24,7 @@ the ego's line (``TARGET_X``), head-on: it blocks as often as the greedy blocker
 bank shot to the wall's side of the paddle, a fixed (and here lucky) influence, so it is shown
 for comparison, not as the greedy reference. :class:`MiddleBlocker` holds the middle and
 :class:`RandomBlocker` acts uniformly at random; neither is told the mode.
+:class:`PredictingBlocker` is told only the last shot's mode and side, on a wrapped env.
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ from lili.envs.air_hockey.env import (
     FRAME_SKIP,
     LEFT,
     MIDDLE,
+    NEXT_MODE,
     PADDLE_RADIUS,
     PUCK_RADIUS,
     RIGHT,
@@ -48,7 +50,7 @@ from lili.envs.air_hockey.env import (
 )
 
 __all__ = ["contact_points", "CrossingBlocker", "GreedyBlocker", "InfluencingBlocker",
-           "MiddleBlocker", "RandomBlocker", "BLOCKERS", "make_blocker"]
+           "MiddleBlocker", "PredictingBlocker", "RandomBlocker", "BLOCKERS", "make_blocker"]
 
 # The side (of the paddle) where the influencer lets the puck end, per mode (see the docs).
 INFLUENCE_SIDE = {LEFT: -1, MIDDLE: -1, RIGHT: +1}
@@ -137,6 +139,36 @@ class InfluencingBlocker:
         mode = int(info["strategy_id"])
         # The puck ends left of the paddle (side -1) when the paddle is right of the puck.
         return _go_to(self.points[mode] - INFLUENCE_SIDE[mode] * self.offset, obs)
+
+
+class PredictingBlocker:
+    """Told the *last* shot's mode and side, not this one's: predicts the mode by the table.
+
+    It plays on ``LastInteractionObservation(AirHockeyEnv(...), outcome=True)``, whose
+    observation ends with the last interaction's mode one-hot, last observation, last action
+    and outcome (the side of the paddle where the puck ended), and meets the predicted mode
+    at its contact point, as :class:`GreedyBlocker` meets the told one; it holds the middle
+    before the first outcome. The striker's next mode is the table's function of exactly that
+    mode and side, apart from its lapses, so this is the ceiling of a greedy blocker that
+    reads the last interaction (LILI's encoder reads no more, and sees the side only through
+    the rewards): against a striker that lapses with probability p it predicts right
+    1 - 2p/3 of the time.
+    """
+
+    def __init__(self, bank_shots: bool = True) -> None:
+        self.points = contact_points(bool(bank_shots))
+
+    def __call__(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        # [x_paddle, y_puck] + last mode one-hot (3) + last obs (2) + last action (1) + outcome
+        if obs.shape != (9,):
+            raise ValueError(f"PredictingBlocker needs the 9 numbers of LastInteractionObservation"
+                             f"(AirHockeyEnv(), outcome=True); got an observation of shape "
+                             f"{obs.shape}")
+        last_mode, outcome = obs[2:5], float(obs[8])
+        if outcome == 0.0:  # no interaction before this one
+            return _go_to(0.0, obs)
+        mode = NEXT_MODE[(int(np.argmax(last_mode)), -1 if outcome < 0 else 1)]
+        return _go_to(self.points[mode], obs)
 
 
 BLOCKERS = ("random", "middle", "crossing", "greedy", "influencer")
