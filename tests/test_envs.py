@@ -376,9 +376,18 @@ def test_last_interaction_observation_tells_the_outcome_when_asked() -> None:
 
 
 def test_last_interaction_outcome_must_be_a_number() -> None:
-    env = LastInteractionObservation(gym.make("lili/LunarLander-v0"), outcome=True)
+    # Lunar Lander declares a vector outcome: refused when the agent is built.
+    with pytest.raises(ValueError, match="needs an outcome that is one number; env LunarLanderEnv "
+                                         "declares _outcome\\(\\) -> np.ndarray"):
+        LastInteractionObservation(gym.make("lili/LunarLander-v0"), outcome=True)
+
+    class Undeclared(PointMassEnv):
+        def _outcome(self):  # declares nothing, returns a pair: refused at the first outcome
+            return (1, 2)
+
+    env = LastInteractionObservation(Undeclared(), outcome=True)
     env.reset(seed=0)
     with pytest.raises(ValueError, match="needs info\\['outcome'\\] on the last step as one finite "
-                                         "number; env LunarLanderEnv gave array"):
+                                         "number; env Undeclared gave \\(1, 2\\)"):
         for _ in range(200):
             env.step(np.zeros(env.action_space.shape, np.float32))
