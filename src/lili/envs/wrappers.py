@@ -93,15 +93,14 @@ class LastInteractionObservation(gym.Wrapper):
         super().__init__(env)
         self.with_outcome = outcome
         declared = getattr(type(env.unwrapped), "_outcome", None)
-        if outcome and declared is not None \
-                and "ndarray" in str(inspect.signature(declared).return_annotation):
+        returns = "" if declared is None else str(inspect.signature(declared).return_annotation)
+        if outcome and "ndarray" in returns:
             # Checked here, when the agent is built, so that a run fails before its folder is
             # written; an env that declares nothing is checked at its first outcome.
             raise ValueError(
                 f"the last-interaction Oracle with outcome=True needs an outcome that is one "
-                f"number; env {type(env.unwrapped).__name__} declares _outcome() -> "
-                f"{inspect.signature(declared).return_annotation}; allowed: an env whose outcome "
-                "is a number (not Lunar Lander's vector)")
+                f"number; env {type(env.unwrapped).__name__} declares _outcome() -> {returns}; "
+                "allowed: an env whose outcome is a number (not Lunar Lander's vector)")
         strat = strategy_box(env, "the last-interaction Oracle")
         obs_space, act_space = env.observation_space, env.action_space
         for name, space in (("observation", obs_space), ("action", act_space)):
