@@ -170,10 +170,34 @@ def test_checkers_and_render() -> None:
     env.close()
 
 
+def test_reveal_side_shows_the_outcome_in_the_last_observation_only() -> None:
+    plain, shown = AirHockeyEnv(aim_noise=0.03), AirHockeyEnv(aim_noise=0.03, reveal_side=True)
+    assert shown.observation_space.shape == (3,)
+    check_env(gym.make("lili/AirHockey-v0", reveal_side=True))
+    rng = np.random.default_rng(0)
+    sides = set()
+    for k in range(12):
+        (a, ia), (b, ib) = (e.reset(seed=3) if k == 0 else e.reset() for e in (plain, shown))
+        assert ia["strategy_id"] == ib["strategy_id"] and b[2] == 0.0
+        np.testing.assert_array_equal(a, b[:2])
+        while True:
+            act = rng.uniform(-1, 1, 1).astype(np.float32)
+            (a, ra, ta, ua, _), (b, rb, tb, ub, info) = plain.step(act), shown.step(act)
+            np.testing.assert_array_equal(a, b[:2])
+            assert (ra, ta, ua) == (rb, tb, ub)  # the same game, only one more number
+            if tb or ub:
+                break
+            assert b[2] == 0.0
+        assert b[2] == info["outcome"]
+        sides.add(info["outcome"])
+    assert sides == {-1, 1}
+
+
 @pytest.mark.parametrize("kwargs, match", [
     ({"aim_noise": -0.1}, "aim_noise=-0.1"),
     ({"aim_noise": 1.0}, "aim_noise=1.0"),
     ({"bank_shots": "yes"}, "bank_shots='yes'"),
+    ({"reveal_side": 1}, "reveal_side=1 is invalid; allowed: True or False"),
 ])
 def test_bad_kwargs(kwargs, match) -> None:
     with pytest.raises(ValueError, match=match):

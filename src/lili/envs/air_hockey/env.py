@@ -70,7 +70,9 @@ What influence is worth (scripted blockers, ``lili.envs.air_hockey.scripted``; m
 Observation (as in the appendix): ``[x_paddle, y_puck]`` (float32), the paddle's lateral
 position and the puck's position along the table; never the puck's lateral position or the
 mode. ``info["strategy"]`` is the mode one-hot (float32, 3), ``info["strategy_id"]`` the mode
-and ``info["success"]`` whether the shot was blocked.
+and ``info["success"]`` whether the shot was blocked. ``reveal_side=True`` (not the appendix's)
+appends a third number, the side the puck ended on, shown only in an interaction's last
+observation (see the class docs).
 
 Randomness: the first mode and every shot's aim noise come from the partner's generator (the
 stream ``RepeatedInteractionEnv`` derives from ``reset(seed)``): the striker draws the next
@@ -247,6 +249,14 @@ class AirHockeyEnv(RepeatedInteractionEnv):
             lapses 0.1).
         render_mode: None or ``"rgb_array"`` (a top view, 240 x 440, drawn headless with EGL;
             about 6 ms a frame with software EGL on an idle core).
+        reveal_side: append a third number to the observation: 0 on every step but the
+            interaction's last, where it is the side the puck ended on (-1 left of the paddle,
+            +1 right; ``info["outcome"]``). False, the default, is the appendix's observation.
+            A departure from the paper for one experiment (issue 13, "Where the blind modes
+            come from" in benchmarks/README.md): the striker's next mode depends on that side,
+            which the appendix's observation shows the encoder only through the distance
+            cost. The policy never acts on a last observation, so only the encoder (which
+            reads each transition's next observation) gains from it.
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"],
@@ -258,21 +268,24 @@ class AirHockeyEnv(RepeatedInteractionEnv):
         bank_shots: bool = True,
         render_mode: str | None = None,
         lapse: float = 0.0,
+        reveal_side: bool = False,
     ) -> None:
         super().__init__(render_mode)
-        if not isinstance(bank_shots, (bool, np.bool_)):
-            raise ValueError(f"bank_shots={bank_shots!r} is invalid; allowed: True or False")
+        for name, value in (("bank_shots", bank_shots), ("reveal_side", reveal_side)):
+            if not isinstance(value, (bool, np.bool_)):
+                raise ValueError(f"{name}={value!r} is invalid; allowed: True or False")
         self.bank_shots = bool(bank_shots)
+        self.reveal_side = bool(reveal_side)
         self.partner = StrikerPartner(aim_noise, lapse)
         self.horizon = HORIZON
         self.model = mujoco.MjModel.from_xml_path(str(XML_PATH))
         self.data = mujoco.MjData(self.model)
         self.dt = self.model.opt.timestep * FRAME_SKIP
+        low, high = [-EGO_RANGE, -HALF_LENGTH], [EGO_RANGE, HALF_LENGTH]
+        if self.reveal_side:
+            low, high = low + [-1.0], high + [1.0]
         self.observation_space = spaces.Box(
-            np.array([-EGO_RANGE, -HALF_LENGTH], dtype=np.float32),
-            np.array([EGO_RANGE, HALF_LENGTH], dtype=np.float32),
-            dtype=np.float32,
-        )
+            np.array(low, dtype=np.float32), np.array(high, dtype=np.float32), dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(1,), dtype=np.float32)
 
         m = self.model
@@ -309,8 +322,11 @@ class AirHockeyEnv(RepeatedInteractionEnv):
         """The ego paddle's lateral position in metres (negative = the ego's left)."""
         return float(self.data.qpos[self._ego_q])
 
-    def _obs(self) -> np.ndarray:
-        obs = np.array([self.paddle_x, self.data.qpos[self._puck_q[1]]], dtype=np.float32)
+    def _obs(self, side: float = 0.0) -> np.ndarray:
+        values = [self.paddle_x, self.data.qpos[self._puck_q[1]]]
+        if self.reveal_side:
+            values.append(side)
+        obs = np.array(values, dtype=np.float32)
         # Joint limits and contacts are soft, so the raw values can overshoot by millimetres.
         return np.clip(obs, self.observation_space.low, self.observation_space.high)
 
@@ -360,7 +376,10 @@ class AirHockeyEnv(RepeatedInteractionEnv):
         reward = -DISTANCE_COST * abs(self.paddle_x - puck_x)
         if self.blocked:
             reward += BLOCK_REWARD + (LEFT_BONUS if self._mode == LEFT else 0.0)
-        return self._obs(), reward, self.blocked or self.arrived
+        done = self.blocked or self.arrived
+        # self.t counts the steps before this one; the base class truncates at the horizon.
+        last = done or self.t + 1 >= self.horizon
+        return self._obs(float(self._outcome()) if last else 0.0), reward, done
 
     def _outcome(self) -> int:
         return -1 if float(self.data.qpos[self._puck_q[0]]) < self.paddle_x else 1
