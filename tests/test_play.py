@@ -231,6 +231,39 @@ def test_scripted_blockers_give_the_bots_ceiling():
         ScriptedBlocker("oracle")
 
 
+def test_the_predictor_plays_on_the_last_shot_through_the_session():
+    """Told only the last shot's mode and side (the session wraps its env for it), the
+    predictor blocks every noise-free bot shot it can predict: all but the first (it holds the
+    middle with nothing to go on), and fewer when the bot lapses."""
+    from lili.play.bot import run_bot
+    from lili.play.policy import ScriptedBlocker
+
+    exact = run_bot(ScriptedBlocker("predictor"), {}, 20, BotConfig(aim_noise=0.0, lapse=0.0))
+    assert [r["blocked"] for r in exact["rows"][1:]] == [1] * 19
+    lapsing = run_bot(ScriptedBlocker("predictor"), {}, 40, BotConfig(aim_noise=0.0, lapse=0.5))
+    assert 20 <= lapsing["blocks"] <= 36
+
+
+def test_lagged_agents_play_and_the_oracle_is_refused(tmp_path):
+    """The last-interaction Oracle acts on the session's env wrapped as in training (the last
+    shot appended); the Oracle, told each shot's mode before it is played, is refused."""
+    from lili.agents import make_agent
+    from lili.play.bot import run_bot
+
+    env = gym.make("lili/AirHockey-v0")
+    for algo, config in (("oracle-last", {**SMALL, "extra": {"oracle-last": {"outcome": True}}}),
+                         ("oracle", SMALL)):
+        make_agent(algo, env, config, seed=0).save(tmp_path / f"{algo}.msgpack")
+    lagged = Blocker.load(tmp_path / "oracle-last.msgpack", make_play_env({}))
+    session = GameSession(lagged, {}, 3)
+    assert session.env.observation_space.shape == (9,) and lagged.latent_dim == 0
+    result = run_bot(lagged, {}, 4, BotConfig(aim_noise=0.03, lapse=0.0), seed=1)
+    assert result["shots"] == 4 and len(result["rows"]) == 4
+    with pytest.raises(ValueError, match="'oracle' agent, told each shot's mode before it is "
+                                         "played.*allowed: every algo but oracle"):
+        Blocker.load(tmp_path / "oracle.msgpack", make_play_env({}))
+
+
 @pytest.mark.parametrize("raw, match", [
     (b"\x00\x01", "binary"),
     ("x" * 1025, "too long"),

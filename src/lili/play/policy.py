@@ -48,14 +48,22 @@ class Blocker:
     def load(cls, path: str | Path, env: gym.Env) -> Blocker:
         """Load a saved agent for ``env``; ValueError (CheckpointError) when it does not fit."""
         from lili.agents import load_agent
+        from lili.envs.wrappers import OracleObservation
 
         agent = load_agent(path, env)
-        obs_dim = int(env.observation_space.shape[0])
-        if agent.obs_dim != obs_dim:
-            # The Oracle sees the true mode, which a person's shot does not reveal to it.
-            raise ValueError(f"{path} holds a {agent.algo!r} agent that observes {agent.obs_dim} "
-                             f"numbers; the play page gives {obs_dim} (every algo but oracle)")
+        if isinstance(agent.env, OracleObservation):
+            # The Oracle is told the mode of the shot it is blocking, which a person's shot
+            # reveals to nobody before it is played; the last-interaction Oracle is told only
+            # the last shot's, which the session knows, so it may play.
+            raise ValueError(f"{path} holds an {agent.algo!r} agent, told each shot's mode "
+                             "before it is played, which a person's shot does not reveal; "
+                             "allowed: every algo but oracle")
         return cls(agent, str(path))
+
+    def wrap(self, env: gym.Env) -> gym.Env:
+        """The env the agent acts on, built around the play env (the last-interaction Oracle
+        appends the last shot; the others act on the env itself)."""
+        return self.agent._wrap(env)
 
     def new_game(self) -> BlockerGame:
         """Acting state for a fresh sequence of interactions (z^1 = 0)."""
@@ -137,6 +145,13 @@ class ScriptedBlocker:
         self.source = f"lili.envs.air_hockey.scripted ({name})"
         self.latent_dim = 0
         self.interactions = 0
+
+    def wrap(self, env: gym.Env) -> gym.Env:
+        """The env the blocker plays on, built around the play env (the predictor reads the
+        last shot's mode and side from ``LastInteractionObservation``)."""
+        from lili.envs.air_hockey.scripted import blocker_env
+
+        return blocker_env(self.name, env)
 
     def new_game(self) -> ScriptedGame:
         from lili.envs.air_hockey.scripted import make_blocker

@@ -22,7 +22,7 @@ __all__ = ["ModeProbe", "collect_latents"]
 def collect_latents(blocker: Blocker, env_kwargs: dict[str, Any], n: int,
                     seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Latents z^i (n x d) and the striker's modes of interaction i (n) in the training env."""
-    env = make_play_env(env_kwargs)
+    env = blocker.wrap(make_play_env(env_kwargs))
     game = blocker.new_game()
     zs, modes = [], []
     obs, info = env.reset(seed=seed)

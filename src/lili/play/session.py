@@ -28,7 +28,7 @@ class GameSession:
     def __init__(self, blocker: Blocker | ScriptedBlocker, env_kwargs: dict[str, Any], shots: int,
                  record: SessionRecord | None = None, probe: ModeProbe | None = None,
                  seed: int = 0) -> None:
-        self.env = make_play_env(env_kwargs)
+        self.env = blocker.wrap(make_play_env(env_kwargs))
         self.table = self.env.unwrapped
         self.striker = AimedStriker(self.table.bank_shots)
         self.table.partner = self.striker

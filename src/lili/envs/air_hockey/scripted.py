@@ -32,6 +32,7 @@ from __future__ import annotations
 import functools
 from typing import Any
 
+import gymnasium as gym
 import mujoco
 import numpy as np
 
@@ -50,7 +51,8 @@ from lili.envs.air_hockey.env import (
 )
 
 __all__ = ["contact_points", "CrossingBlocker", "GreedyBlocker", "InfluencingBlocker",
-           "MiddleBlocker", "PredictingBlocker", "RandomBlocker", "BLOCKERS", "make_blocker"]
+           "MiddleBlocker", "PredictingBlocker", "RandomBlocker", "BLOCKERS",
+           "READS_LAST_INTERACTION", "blocker_env", "make_blocker"]
 
 # The side (of the paddle) where the influencer lets the puck end, per mode (see the docs).
 INFLUENCE_SIDE = {LEFT: -1, MIDDLE: -1, RIGHT: +1}
@@ -171,7 +173,19 @@ class PredictingBlocker:
         return _go_to(self.points[mode], obs)
 
 
-BLOCKERS = ("random", "middle", "crossing", "greedy", "influencer")
+BLOCKERS = ("random", "middle", "crossing", "greedy", "influencer", "predictor")
+READS_LAST_INTERACTION = ("predictor",)
+"""The blockers of :data:`BLOCKERS` that play on ``LastInteractionObservation(env, outcome=True)``
+(see :func:`blocker_env`); the others play on the env itself."""
+
+
+def blocker_env(name: str, env: gym.Env) -> gym.Env:
+    """The env the scripted blocker ``name`` plays on, built around ``env``."""
+    if name in READS_LAST_INTERACTION:
+        from lili.envs.wrappers import LastInteractionObservation
+
+        return LastInteractionObservation(env, outcome=True)
+    return env
 
 
 def make_blocker(name: str, seed: int = 0, bank_shots: bool = True) -> Any:
@@ -186,4 +200,6 @@ def make_blocker(name: str, seed: int = 0, bank_shots: bool = True) -> Any:
         return GreedyBlocker(bank_shots)
     if name == "influencer":
         return InfluencingBlocker(bank_shots=bank_shots)
+    if name == "predictor":
+        return PredictingBlocker(bank_shots)
     raise ValueError(f"unknown blocker {name!r}; allowed: {', '.join(BLOCKERS)}")
