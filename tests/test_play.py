@@ -244,6 +244,26 @@ def test_the_predictor_plays_on_the_last_shot_through_the_session():
     assert 20 <= lapsing["blocks"] <= 36
 
 
+def test_a_blocker_trained_with_the_side_revealed_plays_on_its_own_game(tmp_path):
+    """The session builds the run's env (here ``reveal_side=True``), so the encoder reads the
+    side in each shot's last observation as in training; the plain game does not fit it."""
+    from lili.agents import CheckpointError, make_agent
+    from lili.play.bot import run_bot
+
+    kwargs = {"reveal_side": True}
+    make_agent("lili", gym.make("lili/AirHockey-v0", **kwargs), SMALL, seed=0).save(
+        tmp_path / "a.msgpack")
+    blocker = Blocker.load(tmp_path / "a.msgpack", make_play_env(kwargs))
+    session = GameSession(blocker, kwargs, 2)
+    assert session.env.observation_space.shape == (3,) == (blocker.agent.obs_dim,)
+    first = session.play(0.0)
+    assert first["side"] in (-1, 1) and not np.allclose(session.game.latent, 0)
+    result = run_bot(blocker, kwargs, 3, BotConfig(aim_noise=0.03, lapse=0.0), seed=1)
+    assert result["shots"] == 3
+    with pytest.raises(CheckpointError):
+        Blocker.load(tmp_path / "a.msgpack", make_play_env({}))
+
+
 def test_lagged_agents_play_and_the_oracle_is_refused(tmp_path):
     """The last-interaction Oracle acts on the session's env wrapped as in training (the last
     shot appended); the Oracle, told each shot's mode before it is played, is refused."""
