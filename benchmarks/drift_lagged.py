@@ -8,18 +8,26 @@ and action) both stay at the no-information level, while the Oracle, told the cu
 learns to hold it next to the start (``benchmarks/README.md``, "Drift with a returning
 partner"). The partner reacts to the *sign* of where the ego ended, so for the lagged agent
 the next interaction's value steps at x_end = 0, inside a continuous input. This script
-trains SAC (the default agent config, as the ``influence`` preset) on two lagged
-observations that carry the same information about the partner's next goal:
+trains SAC (the default agent config, as the ``influence`` preset, or ``--set`` fields) on
+lagged observations that carry the same information about the partner's next goal:
 
 - ``position``: :class:`lili.envs.wrappers.LastInteractionObservation` (the Oracle (last
   interaction) itself);
 - ``side``: the last interaction's goal and the side of 0 where it ended (+1 / -1, 0 before
-  the first interaction), so the step is a jump of a discrete input, as for the Oracle.
+  the first interaction), so the step is a jump of a discrete input, as for the Oracle;
+- ``predicted``: the goal that the last interaction predicts (its goal moved one grid step
+  toward the side where it ended; 0 before the first interaction): the Oracle's
+  observation, wrong only after a return of the partner, which nothing in the last
+  interaction shows (:func:`lili.envs.influence.drift.from_last_interaction` plays the
+  scripted policies on the same prediction).
 
-If ``side`` learns to influence and ``position`` does not, the blurred step is the obstacle.
+If ``side`` learns to influence and ``position`` does not, the blurred step is the obstacle;
+if ``predicted`` learns to influence as the Oracle does and ``side`` does not, computing the
+drift from the lagged input is; if ``predicted`` fails too, the returns the last interaction
+cannot foresee are.
 Each seed scores the mean return over its last 10% (mean +- s.e. over seeds) and the share of
 those interactions with g = +-0.125 ("held"). Per-seed records (metrics.csv, summary.json)
-go under ``--out``/<variant>/seed_<k>; the table to ``benchmarks/results/drift_lagged.{md,json}``.
+go under ``--out``/<variant>/seed_<k>; the table to ``benchmarks/results/<--name>.{md,json}``.
 """
 
 from __future__ import annotations
@@ -37,7 +45,9 @@ from gymnasium import spaces
 
 import lili.envs  # noqa: F401 - registers the envs
 from lili.agents import SAC
+from lili.cli import UsageError, parse_overrides
 from lili.envs.influence import HELD
+from lili.envs.influence.drift import GOALS, drifted
 from lili.envs.wrappers import LastInteractionObservation
 from lili.report.stats import mean_se
 from lili.runs import final_window
@@ -77,15 +87,35 @@ class LastSideObservation(gym.Wrapper):
         return np.concatenate([np.asarray(obs, np.float32), self._last])
 
 
-VARIANTS = {"position": LastInteractionObservation, "side": LastSideObservation}
+class PredictedGoalObservation(LastSideObservation):
+    """Append the goal that the last interaction predicts (0 before the first): the last goal
+    moved one grid step toward the side where the ego ended, as the partner moves unless it
+    returns near the start."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self.observation_space = spaces.Box(np.array([-1, -1], np.float32),
+                                            np.array([1, 1], np.float32), dtype=np.float32)
+
+    def _obs(self, obs: np.ndarray) -> np.ndarray:
+        goal, side = self._last
+        predicted = 0.0 if side == 0 else GOALS[drifted(int(np.argmin(np.abs(GOALS - goal))),
+                                                        int(side))]
+        return np.array([obs[0], predicted], np.float32)
 
 
-def run(variant: str, seed: int, n: int, out: Path) -> dict[str, Any]:
-    """Train one seed of ``variant``; write its records; return its score."""
+VARIANTS = {"position": LastInteractionObservation, "side": LastSideObservation,
+            "predicted": PredictedGoalObservation}
+
+
+def run(variant: str, seed: int, n: int, out: Path,
+        config: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Train one seed of ``variant`` (SAC with the agent-config fields ``config`` changed);
+    write its records; return its score."""
     env = VARIANTS[variant](gym.make(ENV))
     rows: list[dict[str, Any]] = []
     t0 = time.process_time()
-    SAC(env, seed=seed).learn(n, callback=rows.append)
+    SAC(env, config=config or {}, seed=seed).learn(n, callback=rows.append)
     cpu = time.process_time() - t0
     last = rows[-final_window(n):]
     final = float(np.mean([r["return"] for r in last]))
@@ -97,6 +127,7 @@ def run(variant: str, seed: int, n: int, out: Path) -> dict[str, Any]:
         w.writerow(["interaction", "return", "strategy_id"])
         w.writerows([r["interaction"], f"{r['return']:.6g}", r["strategy_id"]] for r in rows)
     summary = {"env": ENV, "variant": variant, "seed": seed, "interactions": n,
+               "config": config or {},
                "final_return": final, "held": held, "cpu_time_s": round(cpu, 1)}
     (folder / "summary.json").write_text(json.dumps(summary, indent=1))
     return summary
@@ -107,14 +138,23 @@ def main() -> None:
     p.add_argument("--interactions", type=int, default=2000)
     p.add_argument("--seeds", type=int, default=3)
     p.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    p.add_argument("--seed-from", type=int, default=0, help="first seed (default 0)")
+    p.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
+                   help="agent-config field to change in every run (repeatable)")
+    p.add_argument("--name", default="drift_lagged", help="results file stem")
     p.add_argument("--out", default=str(ROOT / "runs" / "drift_lagged"))
     args = p.parse_args()
+    try:
+        config = parse_overrides(args.set)
+    except UsageError as e:
+        p.error(str(e))
     if args.interactions < 100:
         p.error(f"--interactions {args.interactions} is invalid; allowed: an integer >= 100")
     if args.seeds < 1:
         p.error(f"--seeds {args.seeds} is invalid; allowed: an integer >= 1")
     out = Path(args.out)
-    results = {v: [run(v, s, args.interactions, out) for s in range(args.seeds)]
+    seeds = range(args.seed_from, args.seed_from + args.seeds)
+    results = {v: [run(v, s, args.interactions, out, config) for s in seeds]
                for v in args.variants}
     lines = ["| lagged observation | final return | held | per seed | CPU-s per run |",
              "|---|---:|---:|---|---:|"]
@@ -126,8 +166,8 @@ def main() -> None:
         lines.append(f"| {v} | {mean:.3f} ± {se:.3f} | {100 * held:.0f}% | {per} | {cpu:.0f} |")
     print("\n".join(lines))
     RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "drift_lagged.md").write_text("\n".join(lines) + "\n")
-    (RESULTS / "drift_lagged.json").write_text(json.dumps(results, indent=1))
+    (RESULTS / f"{args.name}.md").write_text("\n".join(lines) + "\n")
+    (RESULTS / f"{args.name}.json").write_text(json.dumps(results, indent=1))
 
 
 if __name__ == "__main__":
