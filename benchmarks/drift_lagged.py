@@ -41,6 +41,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from _results import RESULTS, check_result_name
 from gymnasium import spaces
 
 import lili.envs  # noqa: F401 - registers the envs
@@ -53,7 +54,6 @@ from lili.report.stats import mean_se
 from lili.runs import final_window
 
 ROOT = Path(__file__).resolve().parent.parent
-RESULTS = ROOT / "benchmarks" / "results"
 ENV = "lili/InfluenceDrift-v0"
 
 
@@ -144,6 +144,7 @@ def main() -> None:
     p.add_argument("--name", default="drift_lagged", help="results file stem")
     p.add_argument("--out", default=str(ROOT / "runs" / "drift_lagged"))
     args = p.parse_args()
+    check_result_name(p, args.name)
     try:
         config = parse_overrides(args.set)
     except UsageError as e:

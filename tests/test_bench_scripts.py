@@ -37,7 +37,7 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
 
 @pytest.mark.parametrize(("script", "args"), [
     ("play_bot", ["a=scripted:greedy"]), ("latent_probe", ["run"]), ("influence", []),
-    ("success_by_strategy", ["run"])])
+    ("success_by_strategy", ["run"]), ("drift_lagged", [])])
 @pytest.mark.parametrize("name", ["../x", "/tmp/x", ".hidden", ""])
 def test_result_name_must_be_a_plain_file_name(script: str, args: list[str], name: str,
                                                monkeypatch, capsys) -> None:
@@ -81,3 +81,25 @@ def test_partner_scripted_turns_back_counts_reversals_of_the_target() -> None:
     assert turns_back(np.cos(held), np.sin(held)) == 100.0
     assert turns_back(np.cos(circling), np.sin(circling)) == 0.0
     assert turns_back(np.cos(swept), np.sin(swept)) == 50.0
+
+
+def test_drift_predicted_goal_is_the_partners_goal_when_it_never_returns() -> None:
+    """Without returns the partner's next goal is the last one drifted toward the side where
+    the ego ended, so the prediction the diagnostic hands SAC is exact from the second
+    interaction on (and 0, "nothing yet", in the first)."""
+    import gymnasium as gym
+
+    import lili.envs  # noqa: F401 - registers the envs
+
+    wrapper = _script("drift_lagged").PredictedGoalObservation
+    env = wrapper(gym.make("lili/InfluenceDrift-v0", returns=0.0))
+    rng = np.random.default_rng(0)
+    obs, info = env.reset(seed=3)
+    assert obs[1] == 0.0
+    for interaction in range(30):
+        for _ in range(4):
+            if interaction:
+                assert obs[1] == pytest.approx(info["strategy"][0])
+            obs, _, terminated, truncated, info = env.step(rng.uniform(-1, 1, 1))
+        assert truncated or terminated
+        obs, info = env.reset()
