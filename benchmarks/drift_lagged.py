@@ -19,12 +19,16 @@ lagged observations that carry the same information about the partner's next goa
   toward the side where it ended; 0 before the first interaction): the Oracle's
   observation, wrong only after a return of the partner, which nothing in the last
   interaction shows (:func:`lili.envs.influence.drift.from_last_interaction` plays the
-  scripted policies on the same prediction).
+  scripted policies on the same prediction);
+- ``latent`` (with ``--latent-of RUN``): the latent that a trained LILI's encoder, frozen,
+  computes from the last interaction, so that the latent's code is tested without the
+  co-adaptation of encoder and policy.
 
 If ``side`` learns to influence and ``position`` does not, the blurred step is the obstacle;
 if ``predicted`` learns to influence as the Oracle does and ``side`` does not, computing the
 drift from the lagged input is; if ``predicted`` fails too, the returns the last interaction
-cannot foresee are.
+cannot foresee are; if ``latent`` fails where ``predicted`` learns, LILI's latent is as hard
+to act on as the raw last interaction, moving or not.
 Each seed scores the mean return over its last 10% (mean +- s.e. over seeds) and the share of
 those interactions with g = +-0.125 ("held"). Per-seed records (metrics.csv, summary.json)
 go under ``--out``/<variant>/seed_<k>; the table to ``benchmarks/results/<--name>.{md,json}``.
@@ -36,6 +40,7 @@ import argparse
 import csv
 import json
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -45,11 +50,13 @@ from _results import RESULTS, check_result_name
 from gymnasium import spaces
 
 import lili.envs  # noqa: F401 - registers the envs
-from lili.agents import SAC
+from lili.agents import SAC, load_agent
+from lili.buffer import InteractionBuffer
 from lili.cli import UsageError, parse_overrides
 from lili.envs.influence import HELD
 from lili.envs.influence.drift import GOALS, drifted
 from lili.envs.wrappers import LastInteractionObservation
+from lili.play.policy import agent_file_for_run
 from lili.report.stats import mean_se
 from lili.runs import final_window
 
@@ -104,15 +111,74 @@ class PredictedGoalObservation(LastSideObservation):
         return np.array([obs[0], predicted], np.float32)
 
 
-VARIANTS = {"position": LastInteractionObservation, "side": LastSideObservation,
-            "predicted": PredictedGoalObservation}
+class FrozenLatentObservation(gym.Wrapper):
+    """Append the latent that a trained LILI's encoder, frozen, computes from the last
+    interaction (its ``initial_state()`` latent before the first): LILI's own latent as an
+    input that no longer moves, so SAC on it separates what the latent's code allows from
+    the co-adaptation of encoder and policy in LILI."""
+
+    def __init__(self, env: gym.Env, agent: Any) -> None:
+        super().__init__(env)
+        self.agent = agent
+        z = self._first_z()
+        low = np.concatenate([env.observation_space.low, np.full(z.shape, -np.inf)])
+        self.observation_space = spaces.Box(low.astype(np.float32), -low.astype(np.float32),
+                                            dtype=np.float32)
+        self._new_sequence()
+
+    def _first_z(self) -> np.ndarray:
+        return np.asarray(self.agent.initial_state().z, np.float32)
+
+    def _new_sequence(self) -> None:
+        a = self.agent
+        self._buffer = InteractionBuffer(max(2, a.history + 1), a.horizon, a.obs_dim, a.act_dim)
+        self._z, self._traj = self._first_z(), None
+
+    def reset(self, **kwargs: Any):
+        obs, info = self.env.reset(**kwargs)
+        if kwargs.get("seed") is not None:
+            self._new_sequence()
+        elif self._traj is not None:
+            self._buffer.add({k: np.asarray(v, np.float32) for k, v in self._traj.items()}, obs)
+            self._z = np.asarray(self.agent.next_state(self._buffer).z, np.float32)
+        self._traj = {"obs": [], "act": [], "rew": [], "next_obs": []}
+        self._obs = obs
+        return self._with_z(obs), info
+
+    def step(self, action: Any):
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        for key, value in (("obs", self._obs), ("act", np.clip(action, -1, 1)), ("rew", reward),
+                           ("next_obs", obs)):
+            self._traj[key].append(value)
+        self._obs = obs
+        return self._with_z(obs), reward, terminated, truncated, info
+
+    def _with_z(self, obs: np.ndarray) -> np.ndarray:
+        return np.concatenate([np.asarray(obs, np.float32), self._z])
 
 
-def run(variant: str, seed: int, n: int, out: Path,
+def frozen_latent(run: str) -> Callable[[gym.Env], gym.Env]:
+    """The ``latent`` variant's wrapper factory for the LILI run folder ``run``."""
+    path, cfg = agent_file_for_run(run)
+    if cfg.get("algo") not in ("lili", "lili-no-influence") or cfg.get("env") != ENV:
+        raise ValueError(f"--latent-of {run!r} is a {cfg.get('algo')} run on {cfg.get('env')}; "
+                         f"allowed: a lili or lili-no-influence run on {ENV}")
+    agent = load_agent(path, gym.make(ENV, **cfg.get("env_kwargs", {})))
+    return lambda env: FrozenLatentObservation(env, agent)
+
+
+VARIANTS: dict[str, Callable[[gym.Env], gym.Env] | None] = {
+    "position": LastInteractionObservation, "side": LastSideObservation,
+    "predicted": PredictedGoalObservation,
+    "latent": None}  # built from --latent-of
+
+
+def run(wrappers: dict[str, Callable[[gym.Env], gym.Env]], variant: str, seed: int, n: int,
+        out: Path,
         config: dict[str, Any] | None = None) -> dict[str, Any]:
     """Train one seed of ``variant`` (SAC with the agent-config fields ``config`` changed);
     write its records; return its score."""
-    env = VARIANTS[variant](gym.make(ENV))
+    env = wrappers[variant](gym.make(ENV))
     rows: list[dict[str, Any]] = []
     t0 = time.process_time()
     SAC(env, config=config or {}, seed=seed).learn(n, callback=rows.append)
@@ -137,7 +203,11 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--interactions", type=int, default=2000)
     p.add_argument("--seeds", type=int, default=3)
-    p.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    p.add_argument("--variants", nargs="+", default=["position", "side", "predicted"],
+                   choices=list(VARIANTS))
+    p.add_argument("--latent-of", metavar="RUN",
+                   help="LILI run folder (with a checkpoint) whose frozen encoder the 'latent' "
+                        "variant reads")
     p.add_argument("--seed-from", type=int, default=0, help="first seed (default 0)")
     p.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
                    help="agent-config field to change in every run (repeatable)")
@@ -155,7 +225,15 @@ def main() -> None:
         p.error(f"--seeds {args.seeds} is invalid; allowed: an integer >= 1")
     out = Path(args.out)
     seeds = range(args.seed_from, args.seed_from + args.seeds)
-    results = {v: [run(v, s, args.interactions, out, config) for s in seeds]
+    wrappers = {k: v for k, v in VARIANTS.items() if v is not None}
+    if "latent" in args.variants:
+        if not args.latent_of:
+            p.error("--variants latent needs --latent-of RUN (a LILI run folder on " + ENV + ")")
+        try:
+            wrappers["latent"] = frozen_latent(args.latent_of)
+        except (OSError, ValueError) as e:
+            p.error(str(e))
+    results = {v: [run(wrappers, v, s, args.interactions, out, config) for s in seeds]
                for v in args.variants}
     lines = ["| lagged observation | final return | held | per seed | CPU-s per run |",
              "|---|---:|---:|---|---:|"]
