@@ -103,3 +103,39 @@ def test_drift_predicted_goal_is_the_partners_goal_when_it_never_returns() -> No
             obs, _, terminated, truncated, info = env.step(rng.uniform(-1, 1, 1))
         assert truncated or terminated
         obs, info = env.reset()
+
+
+def test_drift_frozen_latent_is_the_latent_lili_acts_on(tmp_path: Path) -> None:
+    """The ``latent`` variant appends, at every step of an interaction, the latent a trained
+    LILI holds for it when it plays the same actions (:class:`lili.evaluate.Episodes`)."""
+    import gymnasium as gym
+
+    from lili import cli
+    from lili.agents import load_agent
+    from lili.evaluate import Episodes
+
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("warmup_interactions: 3\nhidden: [16]\nenc_hidden: [16]\n")
+    assert cli.main(["train", "influence-drift", "--algo", "lili", "--interactions", "8",
+                     "--out", str(tmp_path), "--config", str(cfg), "--no-progress"]) == 0
+    run = tmp_path / "InfluenceDrift-v0" / "lili" / "seed_0"
+    module = _script("drift_lagged")
+    env = module.frozen_latent(str(run))(gym.make(module.ENV))
+    path, _ = module.agent_file_for_run(str(run))
+    episodes = Episodes(load_agent(path, gym.make(module.ENV)), gym.make(module.ENV), seed=5)
+    latents, actions = [], []
+    for _ in range(4):
+        latents.append(np.asarray(episodes.acting.z))
+        actions.append(episodes.play()["traj"]["act"])
+    assert not np.allclose(latents[1], latents[2])  # the latent does follow the interactions
+    obs, _ = env.reset(seed=5)
+    for z, acts in zip(latents, actions, strict=True):
+        for a in acts:
+            np.testing.assert_allclose(obs[1:], z, rtol=1e-5, atol=1e-6)
+            obs, *_ = env.step(a)
+        obs, _ = env.reset()
+    with pytest.raises(ValueError, match="allowed: a lili or lili-no-influence run"):
+        bad = tmp_path / "sac"
+        assert cli.main(["train", "influence-drift", "--algo", "sac", "--interactions", "4",
+                         "--out", str(bad), "--config", str(cfg), "--no-progress"]) == 0
+        module.frozen_latent(str(bad / "InfluenceDrift-v0" / "sac" / "seed_0"))
