@@ -20,6 +20,8 @@ lagged observations that carry the same information about the partner's next goa
   observation, wrong only after a return of the partner, which nothing in the last
   interaction shows (:func:`lili.envs.influence.drift.from_last_interaction` plays the
   scripted policies on the same prediction);
+- ``predicted-onehot``: the same prediction as one of eight indicators, the goals told
+  apart but not in order (a test of whether order is what ``predicted`` has over the rest);
 - ``latent`` (with ``--latent-of RUN``): the latent that a trained LILI's encoder, frozen,
   computes from the last interaction, so that the latent's code is tested without the
   co-adaptation of encoder and policy.
@@ -104,11 +106,33 @@ class PredictedGoalObservation(LastSideObservation):
         self.observation_space = spaces.Box(np.array([-1, -1], np.float32),
                                             np.array([1, 1], np.float32), dtype=np.float32)
 
-    def _obs(self, obs: np.ndarray) -> np.ndarray:
+    def _predicted(self) -> int | None:
+        """The predicted goal's index on :data:`GOALS`, None before the first interaction."""
         goal, side = self._last
-        predicted = 0.0 if side == 0 else GOALS[drifted(int(np.argmin(np.abs(GOALS - goal))),
-                                                        int(side))]
-        return np.array([obs[0], predicted], np.float32)
+        return None if side == 0 else drifted(int(np.argmin(np.abs(GOALS - goal))), int(side))
+
+    def _obs(self, obs: np.ndarray) -> np.ndarray:
+        index = self._predicted()
+        return np.array([obs[0], 0.0 if index is None else GOALS[index]], np.float32)
+
+
+class PredictedOneHotObservation(PredictedGoalObservation):
+    """The same prediction as one of eight indicators (all 0 before the first interaction):
+    the goals told apart but not laid out in order, as a latent might carry them."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        n = 1 + len(GOALS)
+        self.observation_space = spaces.Box(-np.ones(n, np.float32), np.ones(n, np.float32),
+                                            dtype=np.float32)
+
+    def _obs(self, obs: np.ndarray) -> np.ndarray:
+        out = np.zeros(1 + len(GOALS), np.float32)
+        out[0] = obs[0]
+        index = self._predicted()
+        if index is not None:
+            out[1 + index] = 1.0
+        return out
 
 
 class FrozenLatentObservation(gym.Wrapper):
@@ -169,7 +193,7 @@ def frozen_latent(run: str) -> Callable[[gym.Env], gym.Env]:
 
 VARIANTS: dict[str, Callable[[gym.Env], gym.Env] | None] = {
     "position": LastInteractionObservation, "side": LastSideObservation,
-    "predicted": PredictedGoalObservation,
+    "predicted": PredictedGoalObservation, "predicted-onehot": PredictedOneHotObservation,
     "latent": None}  # built from --latent-of
 
 
