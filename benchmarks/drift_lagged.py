@@ -144,19 +144,15 @@ class FrozenLatentObservation(gym.Wrapper):
     def __init__(self, env: gym.Env, agent: Any) -> None:
         super().__init__(env)
         self.agent = agent
-        z = self._first_z()
-        low = np.concatenate([env.observation_space.low, np.full(z.shape, -np.inf)])
+        self._new_sequence()
+        low = np.concatenate([env.observation_space.low, np.full(self._z.shape, -np.inf)])
         self.observation_space = spaces.Box(low.astype(np.float32), -low.astype(np.float32),
                                             dtype=np.float32)
-        self._new_sequence()
-
-    def _first_z(self) -> np.ndarray:
-        return np.asarray(self.agent.initial_state().z, np.float32)
 
     def _new_sequence(self) -> None:
         a = self.agent
         self._buffer = InteractionBuffer(max(2, a.history + 1), a.horizon, a.obs_dim, a.act_dim)
-        self._z, self._traj = self._first_z(), None
+        self._z, self._traj = np.asarray(a.initial_state().z, np.float32), None
 
     def reset(self, **kwargs: Any):
         obs, info = self.env.reset(**kwargs)
@@ -191,18 +187,17 @@ def frozen_latent(run: str) -> Callable[[gym.Env], gym.Env]:
     return lambda env: FrozenLatentObservation(env, agent)
 
 
-VARIANTS: dict[str, Callable[[gym.Env], gym.Env] | None] = {
+VARIANTS: dict[str, Callable[[gym.Env], gym.Env]] = {
     "position": LastInteractionObservation, "side": LastSideObservation,
-    "predicted": PredictedGoalObservation, "predicted-onehot": PredictedOneHotObservation,
-    "latent": None}  # built from --latent-of
+    "predicted": PredictedGoalObservation, "predicted-onehot": PredictedOneHotObservation}
+LATENT = "latent"  # the variant built from --latent-of (frozen_latent)
 
 
-def run(wrappers: dict[str, Callable[[gym.Env], gym.Env]], variant: str, seed: int, n: int,
-        out: Path,
+def run(variant: str, wrap: Callable[[gym.Env], gym.Env], seed: int, n: int, out: Path,
         config: dict[str, Any] | None = None) -> dict[str, Any]:
-    """Train one seed of ``variant`` (SAC with the agent-config fields ``config`` changed);
-    write its records; return its score."""
-    env = wrappers[variant](gym.make(ENV))
+    """Train one seed of ``variant`` (SAC on ``wrap``'s observation, with the agent-config
+    fields ``config`` changed); write its records; return its score."""
+    env = wrap(gym.make(ENV))
     rows: list[dict[str, Any]] = []
     t0 = time.process_time()
     SAC(env, config=config or {}, seed=seed).learn(n, callback=rows.append)
@@ -228,7 +223,7 @@ def main() -> None:
     p.add_argument("--interactions", type=int, default=2000)
     p.add_argument("--seeds", type=int, default=3)
     p.add_argument("--variants", nargs="+", default=["position", "side", "predicted"],
-                   choices=list(VARIANTS))
+                   choices=[*VARIANTS, LATENT])
     p.add_argument("--latent-of", metavar="RUN",
                    help="LILI run folder (with a checkpoint) whose frozen encoder the 'latent' "
                         "variant reads")
@@ -249,15 +244,15 @@ def main() -> None:
         p.error(f"--seeds {args.seeds} is invalid; allowed: an integer >= 1")
     out = Path(args.out)
     seeds = range(args.seed_from, args.seed_from + args.seeds)
-    wrappers = {k: v for k, v in VARIANTS.items() if v is not None}
-    if "latent" in args.variants:
+    wrappers = dict(VARIANTS)
+    if LATENT in args.variants:
         if not args.latent_of:
             p.error("--variants latent needs --latent-of RUN (a LILI run folder on " + ENV + ")")
         try:
-            wrappers["latent"] = frozen_latent(args.latent_of)
+            wrappers[LATENT] = frozen_latent(args.latent_of)
         except (OSError, ValueError) as e:
             p.error(str(e))
-    results = {v: [run(wrappers, v, s, args.interactions, out, config) for s in seeds]
+    results = {v: [run(v, wrappers[v], s, args.interactions, out, config) for s in seeds]
                for v in args.variants}
     lines = ["| lagged observation | final return | held | per seed | CPU-s per run |",
              "|---|---:|---:|---|---:|"]

@@ -138,8 +138,8 @@ def test_drift_frozen_latent_is_the_latent_lili_acts_on(tmp_path: Path) -> None:
             np.testing.assert_allclose(obs[1:], z, rtol=1e-5, atol=1e-6)
             obs, *_ = env.step(a)
         obs, _ = env.reset()
+    bad = tmp_path / "sac"
+    assert cli.main(["train", "influence-drift", "--algo", "sac", "--interactions", "4",
+                     "--out", str(bad), "--config", str(cfg), "--no-progress"]) == 0
     with pytest.raises(ValueError, match="allowed: a lili or lili-no-influence run"):
-        bad = tmp_path / "sac"
-        assert cli.main(["train", "influence-drift", "--algo", "sac", "--interactions", "4",
-                         "--out", str(bad), "--config", str(cfg), "--no-progress"]) == 0
         module.frozen_latent(str(bad / "InfluenceDrift-v0" / "sac" / "seed_0"))
