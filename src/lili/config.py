@@ -20,7 +20,7 @@ from typing import Any
 import yaml
 
 __all__ = ["check_seed", "MAX_SEED", "AgentConfig", "load_config", "read_yaml", "yaml_value",
-           "BOUNDARY_MODES", "extra_options"]
+           "BOUNDARY_MODES", "LATENT_KINDS", "extra_options"]
 
 MAX_SEED = 2**32 - 1
 """Largest seed: NumPy's and JAX's generators take 32-bit seeds without folding them."""
@@ -35,6 +35,7 @@ def check_seed(seed: Any, name: str = "seed") -> int:
     return int(seed)
 
 BOUNDARY_MODES = ("bootstrap", "influence", "cut", "same_z")
+LATENT_KINDS = ("continuous", "categorical")
 
 
 @dataclass(frozen=True)
@@ -51,6 +52,13 @@ class AgentConfig:
         hidden: actor and critic hidden widths (paper: 2x256).
         enc_hidden: encoder and decoder hidden widths (paper: 2x128).
         latent_dim: size of z (paper: 8).
+        latent_kind: ``continuous`` (the paper: z is the encoder's linear output) or
+            ``categorical`` (z is the one-hot of the encoder's largest output, trained by the
+            straight-through estimator: forward the one-hot, backward the softmax's
+            gradient), so that z names one of ``latent_dim`` strategies. Measured on
+            ``lili/InfluenceDrift-v0``, where a policy learns to influence from the partner's
+            predicted goal given as indicators but not from LILI's continuous latent
+            (``benchmarks/README.md``, "Drift: what a lagged agent needs to influence").
         history: number of past interactions the encoder reads (1 = the paper's LILI).
         batch_interactions, per_interaction: a batch is ``batch_interactions`` interactions
             with ``per_interaction`` transitions each (32 x 8 = 256, as in LILI's code), drawn
@@ -107,6 +115,7 @@ class AgentConfig:
     hidden: tuple[int, ...] = (256, 256)
     enc_hidden: tuple[int, ...] = (128, 128)
     latent_dim: int = 8
+    latent_kind: str = "continuous"
     history: int = 1
     batch_interactions: int = 32
     per_interaction: int = 8
@@ -158,6 +167,8 @@ class AgentConfig:
                                           or self.boundary not in BOUNDARY_MODES):
             raise _bad(self, "boundary", ", ".join(BOUNDARY_MODES) + " or null (the agent's "
                        "default)")
+        if not isinstance(self.latent_kind, str) or self.latent_kind not in LATENT_KINDS:
+            raise _bad(self, "latent_kind", " or ".join(LATENT_KINDS))
         _check_extra_shape(self.extra)
 
     @classmethod

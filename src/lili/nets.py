@@ -10,7 +10,16 @@ import jax.numpy as jnp
 
 from lili.dists import soft_clip_log_std
 
-__all__ = ["MLP", "Actor", "TwinCritic", "Encoder", "Decoder"]
+__all__ = ["MLP", "Actor", "TwinCritic", "Encoder", "Decoder", "straight_through_one_hot"]
+
+
+def straight_through_one_hot(logits: jax.Array) -> jax.Array:
+    """The one-hot of ``logits``' largest entry, with the softmax's gradient (Bengio et al.
+    2013's straight-through estimator): the forward value is exactly one-hot, so everything
+    downstream sees one of ``logits.shape[-1]`` names, while the encoder still learns."""
+    soft = jax.nn.softmax(logits, axis=-1)
+    hard = jax.nn.one_hot(jnp.argmax(logits, axis=-1), logits.shape[-1], dtype=soft.dtype)
+    return soft + jax.lax.stop_gradient(hard - soft)
 
 
 class MLP(nn.Module):

@@ -17,7 +17,8 @@ Exactly the semantics of DESIGN.md "LILI semantics":
   observation of i+1 with z^{i+1} = E(tau^i); LILI (no influence) uses y = r.
 
 Latents inside the critic target come from a Polyak-averaged copy of the encoder (see
-``AgentConfig.target_encoder``).
+``AgentConfig.target_encoder``). With ``AgentConfig.latent_kind="categorical"`` z is the
+one-hot of E's largest output (a departure from the paper's continuous z, off by default).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from lili.agents.sac import SAC, SACCore, register, sg
 from lili.buffer import Batch, Window
 from lili.config import AgentConfig
 from lili.dists import unit_gaussian_nll
-from lili.nets import Decoder, Encoder
+from lili.nets import Decoder, Encoder, straight_through_one_hot
 
 __all__ = ["LILI", "LILICore", "decoder_loss"]
 
@@ -82,7 +83,10 @@ class LILICore(SACCore):
              norm.obs(nxt), phase[..., None], last[..., None]], -1)
 
     def _encode(self, enc: Params, norm: Normaliser, win: Window) -> jax.Array:
-        return self.encoder.apply(enc, self._features(norm, win), win["weight"])
+        out = self.encoder.apply(enc, self._features(norm, win), win["weight"])
+        if self.config.latent_kind == "categorical":
+            return straight_through_one_hot(out)
+        return out
 
     def _latents(self, model: Params, target: Params, norm: Normaliser, batch: Batch):
         win = batch["window"]
