@@ -95,6 +95,32 @@ def test_same_z_reading_is_available_as_an_option():
     np.testing.assert_allclose(np.asarray(y), np.asarray(want), rtol=1e-5, atol=1e-5)
 
 
+def test_categorical_latent_is_one_hot_and_the_encoder_learns_through_it():
+    env = gym.make("lili/PointMass-v0")
+    agent = LILI(env, SMALL.replace(latent_kind="categorical"), seed=3)
+    core, state = agent.core, agent.state
+    batch = _batch(agent, np.random.default_rng(1))
+    z, zbar, zbar_next = core._latents(state.model, state.target, state.norm, batch)
+    for latent in (z, zbar, zbar_next):
+        latent = np.asarray(latent)
+        np.testing.assert_array_equal(latent.sum(-1), 1.0)
+        assert set(np.unique(latent)) <= {0.0, 1.0}
+    # The one-hot names the encoder's largest output ...
+    prev = {k: v[:, :-1] for k, v in batch["window"].items()}
+    logits = core.encoder.apply(state.model["encoder"], core._features(state.norm, prev),
+                                prev["weight"])
+    np.testing.assert_array_equal(np.argmax(np.asarray(z), -1), np.argmax(np.asarray(logits), -1))
+    # ... and J_rep's gradient reaches the encoder through it (straight-through).
+    grads = jax.grad(lambda enc: core._rep_loss(
+        state.model, state.norm, batch,
+        core._latents(dict(state.model, encoder=enc), state.target, state.norm, batch)[0]))(
+        state.model["encoder"])
+    assert any(float(jnp.abs(g).max()) > 0 for g in jax.tree_util.tree_leaves(grads))
+    # Acting holds the same one-hot the updates use.
+    acting = np.asarray(core.jit_latent(state.model, state.norm, {k: v[0] for k, v in prev.items()}))
+    np.testing.assert_array_equal(acting, np.asarray(z)[0])
+
+
 def test_sac_bootstraps_from_the_next_interaction():
     env = gym.make("lili/PointMass-v0")
     agent = SAC(env, SMALL, seed=0)
@@ -172,6 +198,7 @@ def test_load_rejects_corrupt_and_mismatched_files(tmp_path):
     ({"hidden": [0]}, "hidden"),
     ({"boundary": "sideways"}, "boundary='sideways'"),
     ({"latent_dim": 0}, "latent_dim=0"),
+    ({"latent_kind": "discrete"}, "latent_kind='discrete'.*continuous or categorical"),
     ({"lr_actor": "fast"}, "lr_actor='fast'"),
     ({"warmup": 3}, "unknown config key"),
 ])

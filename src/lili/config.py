@@ -59,6 +59,9 @@ class AgentConfig:
             ``lili/InfluenceDrift-v0``, where a policy learns to influence from the partner's
             predicted goal given as indicators but not from LILI's continuous latent
             (``benchmarks/README.md``, "Drift: what a lagged agent needs to influence").
+        latent_balance: with a categorical latent, the weight in J_rep of log K - H of the
+            batch's mean category probabilities (0 = off), which keeps the encoder from
+            sending every interaction to one category (``lili.agents.lili.category_imbalance``).
         history: number of past interactions the encoder reads (1 = the paper's LILI).
         batch_interactions, per_interaction: a batch is ``batch_interactions`` interactions
             with ``per_interaction`` transitions each (32 x 8 = 256, as in LILI's code), drawn
@@ -116,6 +119,7 @@ class AgentConfig:
     enc_hidden: tuple[int, ...] = (128, 128)
     latent_dim: int = 8
     latent_kind: str = "continuous"
+    latent_balance: float = 1.0
     history: int = 1
     batch_interactions: int = 32
     per_interaction: int = 8
@@ -229,7 +233,7 @@ _NUMBERS: dict[str, tuple[Callable[[float], bool], str]] = {
         "lr_actor", "lr_critic", "lr_alpha", "lr_encoder", "lr_decoder", "updates_per_step",
         "init_alpha")},
     **{name: ((lambda v: v >= 0), "a finite number >= 0") for name in (
-        "critic_to_encoder", "rep_weight")},
+        "critic_to_encoder", "rep_weight", "latent_balance")},
 }
 """Number fields: (test, what is allowed). Every number must also be finite and not a bool."""
 

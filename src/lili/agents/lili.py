@@ -34,7 +34,7 @@ from lili.config import AgentConfig
 from lili.dists import unit_gaussian_nll
 from lili.nets import Decoder, Encoder, straight_through_one_hot
 
-__all__ = ["LILI", "LILICore", "decoder_loss"]
+__all__ = ["LILI", "LILICore", "decoder_loss", "category_imbalance"]
 
 
 def decoder_loss(decoder: Decoder, params: Params, norm: Normaliser, batch: Batch,
@@ -47,6 +47,16 @@ def decoder_loss(decoder: Decoder, params: Params, norm: Normaliser, batch: Batc
                               norm.rew(batch["rew"])[..., None]], -1)
     zb = jnp.broadcast_to(z[:, None, :], (*s.shape[:-1], z.shape[-1]))
     return unit_gaussian_nll(decoder.apply(params, s, batch["act"], zb), target)
+
+
+def category_imbalance(p: jax.Array) -> jax.Array:
+    """log K - H(p) >= 0 for the batch's mean category probabilities ``p`` [K]: zero when the
+    batch uses all K categories equally. A one-hot latent whose encoder starts with one
+    largest output for nearly every input never trains the decoder on the other categories
+    and stays collapsed (measured on Drift: 499 of 500 interactions in one category); this
+    term spreads the batch over the categories so the decoder can tell them apart."""
+    k = p.shape[-1]
+    return jnp.log(k) + (p * jnp.log(jnp.maximum(p, 1e-12))).sum(-1)
 
 
 class LILICore(SACCore):
@@ -82,8 +92,12 @@ class LILICore(SACCore):
             [norm.obs(obs), win["act"], norm.rew(win["rew"])[..., None], norm.delta(obs, nxt),
              norm.obs(nxt), phase[..., None], last[..., None]], -1)
 
+    def _encoder_out(self, enc: Params, norm: Normaliser, win: Window) -> jax.Array:
+        """E's linear output: z itself, or with a categorical latent its logits."""
+        return self.encoder.apply(enc, self._features(norm, win), win["weight"])
+
     def _encode(self, enc: Params, norm: Normaliser, win: Window) -> jax.Array:
-        out = self.encoder.apply(enc, self._features(norm, win), win["weight"])
+        out = self._encoder_out(enc, norm, win)
         if self.config.latent_kind == "categorical":
             return straight_through_one_hot(out)
         return out
@@ -97,7 +111,12 @@ class LILICore(SACCore):
         return z, self._encode(enc_t, norm, prev), self._encode(enc_t, norm, nxt)
 
     def _rep_loss(self, model: Params, norm: Normaliser, batch: Batch, z: jax.Array) -> jax.Array:
-        return decoder_loss(self.decoder, model["decoder"], norm, batch, z)
+        loss = decoder_loss(self.decoder, model["decoder"], norm, batch, z)
+        if self.config.latent_kind == "categorical" and self.config.latent_balance > 0:
+            prev = {k: v[:, :-1] for k, v in batch["window"].items()}
+            p = jax.nn.softmax(self._encoder_out(model["encoder"], norm, prev), -1).mean(0)
+            loss = loss + self.config.latent_balance * category_imbalance(p)
+        return loss
 
     def _act_latent(self, model: Params, norm: Normaliser, window: Window) -> jax.Array:
         batched = {k: v[None] for k, v in window.items()}
