@@ -18,8 +18,12 @@ influencer does every time, the greedy response never) and the mean |x_end - g|.
 ("nan") when the partner never changed strategy in the held-out part. Where the env has
 discrete strategies (``info["strategy_id"]``, e.g. air hockey's three modes) a second table
 gives, per strategy, how often the nearest latent names it when it is the one played: a
-strategy the latent does not tell apart scores near 0 there. Prints the tables and writes
-``benchmarks/results/<--name>.json``.
+strategy the latent does not tell apart scores near 0 there. In Drift z^i can know at most
+the goal that interaction i-1 *predicts* (its goal moved one step toward the side where it
+ended; a return is unknowable), so for Drift runs a third table scores the nearest-neighbour
+probe against that predicted goal, overall and where it is one of the two goals next to the
+start (the ones the influencer holds), and lists which of those two were predicted at all.
+Prints the tables and writes ``benchmarks/results/<--name>.json``.
 """
 
 from __future__ import annotations
@@ -32,13 +36,21 @@ from _results import RESULTS, check_result_name
 
 from lili.agents import load_agent
 from lili.envs.checker import load_env_class
+from lili.envs.influence import HELD
+from lili.envs.influence.drift import drifted
 from lili.evaluate import Episodes
 from lili.play.policy import agent_file_for_run
 
 
 def nearest_label(z_fit: np.ndarray, labels: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """The label of the nearest ``z_fit`` (squared Euclidean distance) for each row of ``z``."""
-    return labels[((z[:, None, :] - z_fit[None, :, :]) ** 2).sum(-1).argmin(1)]
+    """The label of the nearest ``z_fit`` (squared Euclidean distance) for each row of ``z``;
+    among equally near ones the commonest label (a categorical latent puts many interactions
+    on exactly the same z, and the first of them need not be typical)."""
+    d = ((z[:, None, :] - z_fit[None, :, :]) ** 2).sum(-1)
+    tied = d <= d.min(1, keepdims=True) + 1e-9
+    values, index = np.unique(labels, return_inverse=True)
+    votes = tied.astype(np.int64) @ np.eye(len(values), dtype=np.int64)[index]
+    return values[votes.argmax(1)]
 
 
 def nearest_neighbour(z_fit: np.ndarray, g_fit: np.ndarray, z: np.ndarray,
@@ -61,6 +73,26 @@ def recall_per_strategy(z_fit: np.ndarray, id_fit: np.ndarray, z: np.ndarray,
     guess = nearest_label(z_fit, id_fit, z)
     return {int(m): (float(np.mean(guess[ids == m] == m)), int(np.sum(ids == m)))
             for m in np.unique(ids)}
+
+
+def drift_predicted(ids: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """Drift: the goal id that interaction i-1 predicts for interaction i (i >= 1), i.e. the
+    partner's move if it does not return (the first interaction has none: -1)."""
+    side = np.where(ends >= 0, 1, -1)
+    return np.r_[-1, [drifted(int(i), int(o)) for i, o in
+                      zip(ids[:-1], side[:-1], strict=True)]]
+
+
+def predicted_probe(z: np.ndarray, ids: np.ndarray, ends: np.ndarray, k: int,
+                    near: tuple[int, ...]) -> dict:
+    """The nearest-neighbour probe (fit on interactions 1..k-1, scored on k..) against
+    Drift's predicted goal, overall and where the predicted goal is in ``near``."""
+    pred = drift_predicted(ids, ends)
+    guess = nearest_label(z[1:k], pred[1:k], z[k:])
+    hit, at = guess == pred[k:], np.isin(pred[k:], near)
+    return {"knn": float(hit.mean()), "knn_near": float(hit[at].mean()) if at.any()
+            else float("nan"), "near_count": int(at.sum()),
+            "near_seen": sorted(int(i) for i in np.unique(pred[np.isin(pred, near)]))}
 
 
 def probe(run: str, n: int) -> dict:
@@ -88,7 +120,10 @@ def probe(run: str, n: int) -> dict:
     sid = np.asarray(ids)
     # Discrete strategies (air hockey's modes): whether the latent tells each one apart.
     recall = recall_per_strategy(z[:k], sid[:k], z[k:], sid[k:]) if np.all(sid >= 0) else {}
-    return {"recall_per_strategy": recall, "run": run, "algo": cfg["algo"],
+    predicted = predicted_probe(z, sid, end, k, HELD[cfg["env"]]) \
+        if cfg["env"] == "lili/InfluenceDrift-v0" else None
+    return {"recall_per_strategy": recall, "predicted": predicted, "run": run,
+            "algo": cfg["algo"],
             "interactions_trained": int(cfg["interactions"]),
             "probe_r2": r2, "knn": knn, "knn_rare": knn_rare, "base_rate": base,
             "return": float(np.mean(returns)),
@@ -125,6 +160,15 @@ def main() -> None:
             got = r["recall_per_strategy"]
             cells = [f"{got[m][0]:.2f} ({got[m][1]})" if m in got else "—" for m in range(n_ids)]
             lines.append(f"| {r['run']} | " + " | ".join(cells) + " |")
+    drift = [r for r in rows if r["predicted"]]
+    if drift:
+        lines += ["", "Drift: nearest z names the goal the last interaction predicts", "",
+                  "| run | right | ... where it is next to the start (held-out count) | "
+                  "ids next to the start ever predicted |", "|---|---:|---:|---|"]
+        for r in drift:
+            p = r["predicted"]
+            lines.append(f"| {r['run']} | {p['knn']:.2f} | {p['knn_near']:.2f} "
+                         f"({p['near_count']}) | {', '.join(map(str, p['near_seen'])) or '—'} |")
     print("\n".join(lines))
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / f"{args.name}.json").write_text(json.dumps(rows, indent=1))

@@ -117,7 +117,8 @@ def test_categorical_latent_is_one_hot_and_the_encoder_learns_through_it():
         state.model["encoder"])
     assert any(float(jnp.abs(g).max()) > 0 for g in jax.tree_util.tree_leaves(grads))
     # Acting holds the same one-hot the updates use.
-    acting = np.asarray(core.jit_latent(state.model, state.norm, {k: v[0] for k, v in prev.items()}))
+    first = {k: v[0] for k, v in prev.items()}
+    acting = np.asarray(core.jit_latent(state.model, state.norm, first))
     np.testing.assert_array_equal(acting, np.asarray(z)[0])
 
 

@@ -73,6 +73,32 @@ def test_latent_probe_recall_per_strategy() -> None:
     assert recall(z_fit, ids_fit, z, ids) == {0: (1.0, 1), 1: (1.0, 2), 2: (0.0, 2)}
 
 
+def test_latent_probe_nearest_label_breaks_ties_by_the_commonest_label() -> None:
+    nearest = _script("latent_probe").nearest_label
+    z_fit = np.array([[1.0, 0.0], [1.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    labels = np.array([7, 2, 2, 5])
+    got = nearest(z_fit, labels, np.array([[1.0, 0.0], [0.1, 0.9]]))
+    np.testing.assert_array_equal(got, [2, 5])
+
+
+def test_latent_probe_scores_drift_against_the_predicted_goal() -> None:
+    script = _script("latent_probe")
+    ids = np.array([3, 4, 3, 4, 5, 6, 7, 7, 4, 3])
+    ends = np.array([0.2, -0.2, 0.2, 0.9, 0.9, 0.9, 0.9, -0.5, -0.1, 0.3])
+    # Each goal moved one step toward the side where it ended (held at the walls).
+    np.testing.assert_array_equal(script.drift_predicted(ids, ends),
+                                  [-1, 4, 3, 4, 5, 6, 7, 7, 6, 3])
+    # A latent that is the one-hot of the predicted goal is named right every time; one that
+    # lumps goals 3 and 4 together scores chance between them.
+    ids, ends = np.r_[ids, ids], np.r_[ends, ends]  # the fit (first copy) sees every goal
+    pred = script.drift_predicted(ids, ends)
+    clean = np.eye(8)[np.maximum(pred, 0)]
+    got = script.predicted_probe(clean, ids, ends, 10, (3, 4))
+    assert got == {"knn": 1.0, "knn_near": 1.0, "near_count": 5, "near_seen": [3, 4]}
+    lumped = np.eye(8)[np.where(np.isin(pred, (3, 4)), 3, np.maximum(pred, 0))]
+    assert script.predicted_probe(lumped, ids, ends, 10, (3, 4))["knn_near"] < 1.0
+
+
 def test_partner_scripted_turns_back_counts_reversals_of_the_target() -> None:
     turns_back = _script("partner_scripted").turns_back
     held = np.array([1.4, 1.6] * 10)  # the influencer's hold at the top: turns every time
