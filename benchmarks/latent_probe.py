@@ -23,6 +23,13 @@ the goal that interaction i-1 *predicts* (its goal moved one step toward the sid
 ended; a return is unknowable), so for Drift runs a third table scores the nearest-neighbour
 probe against that predicted goal, overall and where it is one of the two goals next to the
 start (the ones the influencer holds), and lists which of those two were predicted at all.
+A fourth table asks whether the encoder could tell apart the goals influence would produce:
+the scripted influencer plays 400 interactions (env seed 5) with the run's encoder frozen
+(:class:`drift_lagged.FrozenLatentObservation`), and for each goal those interactions predict
+it gives the goal the nearest latent of the agent's own play names, and how far those latents
+lie from the agent's own (median distance to the nearest; own play against itself beside it),
+and how often a nearest-neighbour probe fitted on the first half of those interactions names
+the second half's goals (whether the latent tells them apart among themselves; 0.5 is chance).
 Prints the tables and writes ``benchmarks/results/<--name>.json``.
 """
 
@@ -31,12 +38,14 @@ from __future__ import annotations
 import argparse
 import json
 
+import gymnasium as gym
 import numpy as np
 from _results import RESULTS, check_result_name
+from drift_lagged import FrozenLatentObservation
 
 from lili.agents import load_agent
 from lili.envs.checker import load_env_class
-from lili.envs.influence import HELD
+from lili.envs.influence import HELD, make_scripted
 from lili.envs.influence.drift import drifted
 from lili.evaluate import Episodes
 from lili.play.policy import agent_file_for_run
@@ -95,11 +104,56 @@ def predicted_probe(z: np.ndarray, ids: np.ndarray, ends: np.ndarray, k: int,
             "near_seen": sorted(int(i) for i in np.unique(pred[np.isin(pred, near)]))}
 
 
+def naming(z_fit: np.ndarray, labels_fit: np.ndarray, z: np.ndarray,
+           labels: np.ndarray) -> dict[int, dict]:
+    """For each label of ``z``: which labels the nearest ``z_fit`` gives its rows (counts)
+    and the median distance of its rows to the nearest ``z_fit``."""
+    near = nearest_label(z_fit, labels_fit, z)
+    dist = np.sqrt(((z[:, None, :] - z_fit[None, :, :]) ** 2).sum(-1)).min(1)
+    out = {}
+    for label in np.unique(labels):
+        m = labels == label
+        named, counts = np.unique(near[m], return_counts=True)
+        out[int(label)] = {"named": {int(a): int(b) for a, b in zip(named, counts, strict=True)},
+                           "distance": float(np.median(dist[m]))}
+    return out
+
+
+def own_spacing(z: np.ndarray) -> float:
+    """Median distance from each latent to the nearest other one."""
+    d = np.sqrt(((z[:, None, :] - z[None, :, :]) ** 2).sum(-1))
+    np.fill_diagonal(d, np.inf)
+    return float(np.median(d.min(1)))
+
+
+def influencer_latents(agent, env_id: str, env_kwargs: dict, n: int = 400,
+                       seed: int = 5) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(latent, goal id, end position) of ``n`` interactions played by the env's scripted
+    influencer, the latent computed by ``agent``'s frozen encoder from the interaction before."""
+    env = FrozenLatentObservation(gym.make(env_id, **env_kwargs), agent)
+    policy = make_scripted(env_id, "influencer", seed)
+    dim = env.observation_space.shape[0] - agent.latent_dim
+    zs, ids, ends = [], [], []
+    obs, info = env.reset(seed=seed)
+    for i in range(n):
+        if i:
+            obs, info = env.reset()
+        zs.append(obs[dim:].copy())
+        ids.append(int(info["strategy_id"]))
+        done = False
+        while not done:
+            obs, _, term, trunc, info = env.step(policy(obs[:dim], info))
+            done = term or trunc
+        ends.append(float(obs[0]))
+    return np.asarray(zs), np.asarray(ids), np.asarray(ends)
+
+
 def probe(run: str, n: int) -> dict:
     """Probe one run (see the module docstring)."""
     path, cfg = agent_file_for_run(run)
     env = load_env_class(cfg["env"])(**cfg.get("env_kwargs", {}))
-    episodes = Episodes(load_agent(path, env), env, seed=11)
+    agent = load_agent(path, env)
+    episodes = Episodes(agent, env, seed=11)
     zs, goals, ids, ends, returns = [], [], [], [], []
     for _ in range(n):
         zs.append(np.asarray(episodes.acting.z, np.float32))
@@ -120,8 +174,17 @@ def probe(run: str, n: int) -> dict:
     sid = np.asarray(ids)
     # Discrete strategies (air hockey's modes): whether the latent tells each one apart.
     recall = recall_per_strategy(z[:k], sid[:k], z[k:], sid[k:]) if np.all(sid >= 0) else {}
-    predicted = predicted_probe(z, sid, end, k, HELD[cfg["env"]]) \
-        if cfg["env"] == "lili/InfluenceDrift-v0" else None
+    predicted = None
+    if cfg["env"] == "lili/InfluenceDrift-v0":
+        predicted = predicted_probe(z, sid, end, k, HELD[cfg["env"]])
+        zi, idi, endi = influencer_latents(agent, cfg["env"], cfg.get("env_kwargs", {}))
+        own = drift_predicted(sid, end)
+        pred_i = drift_predicted(idi, endi)[1:]
+        predicted["influencer"] = naming(z[1:], own[1:], zi[1:], pred_i)
+        half = len(pred_i) // 2  # can the latent tell those goals apart among themselves?
+        predicted["influencer_apart"] = float(np.mean(
+            nearest_label(zi[1:][:half], pred_i[:half], zi[1:][half:]) == pred_i[half:]))
+        predicted["own_spacing"] = own_spacing(z[1:])
     return {"recall_per_strategy": recall, "predicted": predicted, "run": run,
             "algo": cfg["algo"],
             "interactions_trained": int(cfg["interactions"]),
@@ -169,6 +232,19 @@ def main() -> None:
             p = r["predicted"]
             lines.append(f"| {r['run']} | {p['knn']:.2f} | {p['knn_near']:.2f} "
                          f"({p['near_count']}) | {', '.join(map(str, p['near_seen'])) or '—'} |")
+    if drift:
+        lines += ["", "Drift: the goals the scripted influencer's interactions predict, named by "
+                  "the nearest latent of the agent's own play", "",
+                  "| run | predicted goal id (interactions) | named as (count) | distance to "
+                  "own latents (own spacing) | told apart |", "|---|---|---|---:|---:|"]
+        for r in drift:
+            p = r["predicted"]
+            for goal, got in p["influencer"].items():
+                named = ", ".join(f"{a} ({b})" for a, b in got["named"].items())
+                total = sum(got["named"].values())
+                lines.append(f"| {r['run']} | {goal} ({total}) | {named} | "
+                             f"{got['distance']:.3f} ({p['own_spacing']:.3f}) | "
+                             f"{p['influencer_apart']:.2f} |")
     print("\n".join(lines))
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / f"{args.name}.json").write_text(json.dumps(rows, indent=1))

@@ -81,6 +81,18 @@ def test_latent_probe_nearest_label_breaks_ties_by_the_commonest_label() -> None
     np.testing.assert_array_equal(got, [2, 5])
 
 
+def test_latent_probe_naming_of_latents_off_the_agents_own_play() -> None:
+    script = _script("latent_probe")
+    z_fit = np.array([[0.0], [0.0], [1.0]])
+    labels_fit = np.array([4, 4, 5])
+    # Goals 3 and 4 under another policy: both land nearest the latent of goal 4.
+    z = np.array([[0.1], [0.3], [-0.2]])
+    got = script.naming(z_fit, labels_fit, z, np.array([3, 4, 3]))
+    assert got[3]["named"] == {4: 2} and got[4]["named"] == {4: 1}
+    assert got[3]["distance"] == pytest.approx(0.15) and got[4]["distance"] == pytest.approx(0.3)
+    assert script.own_spacing(np.array([[0.0], [0.5], [2.0]])) == pytest.approx(0.5)
+
+
 def test_latent_probe_scores_drift_against_the_predicted_goal() -> None:
     script = _script("latent_probe")
     ids = np.array([3, 4, 3, 4, 5, 6, 7, 7, 4, 3])
