@@ -200,6 +200,8 @@ def test_load_rejects_corrupt_and_mismatched_files(tmp_path):
     ({"boundary": "sideways"}, "boundary='sideways'"),
     ({"latent_dim": 0}, "latent_dim=0"),
     ({"latent_kind": "discrete"}, "latent_kind='discrete'.*continuous or categorical"),
+    ({"random_interactions": 1.5}, r"random_interactions=1.5.*\[0, 1\]"),
+    ({"latent_balance": -1}, "latent_balance=-1"),
     ({"lr_actor": "fast"}, "lr_actor='fast'"),
     ({"warmup": 3}, "unknown config key"),
 ])

@@ -14,7 +14,7 @@ from lili.agents import LILI, SAC, Oracle
 from lili.config import AgentConfig
 from lili.evaluate import Episodes, evaluate
 from lili.runs import RunLogger
-from lili.train import Stream, train
+from lili.train import Stream, plays_at_random, train
 
 FAST = {"hidden": [32, 32], "enc_hidden": [16, 16], "latent_dim": 3, "warmup_interactions": 3,
         "checkpoint_every": 4, "batch_interactions": 8, "per_interaction": 4}
@@ -93,6 +93,27 @@ def test_same_seed_same_numbers_other_seed_other_numbers():
 
     a, b, c = returns(0), returns(0), returns(1)
     assert a == b and a != c
+
+
+def test_random_interactions_are_drawn_from_the_seed_and_played_at_random():
+    draws = [plays_at_random(4, i, 3, 0.3) for i in range(2000)]
+    assert draws[:3] == [True] * 3 and 0.27 < np.mean(draws[3:]) < 0.33
+    assert draws == [plays_at_random(4, i, 3, 0.3) for i in range(2000)]
+    assert not any(plays_at_random(4, i, 3, 0.0) for i in range(3, 200))
+    assert draws != [plays_at_random(5, i, 3, 0.3) for i in range(2000)]
+    # In the loop: after the warm-up an interaction drawn at random plays the warm-up's
+    # uniform actions (from the same (seed, interaction) generator), the others the policy's.
+    agent = SAC(gym.make("lili/InfluenceDrift-v0"),
+                AgentConfig.from_dict({**FAST, "random_interactions": 0.5}), seed=2)
+    _loop(agent, 12)
+    buf = agent.stream.buffer
+    chosen = [i for i in range(3, 12) if plays_at_random(2, i, 3, 0.5)]
+    assert 0 < len(chosen) < 9
+    for i in range(3, 12):
+        rng = np.random.default_rng([2, i])
+        uniform = np.array([rng.uniform(-1.0, 1.0, 1) for _ in range(agent.horizon)])
+        acts = np.asarray(buf.window(i, 1, None)["act"])[0]
+        assert np.allclose(acts, uniform) == (i in chosen), i
 
 
 def test_evaluate_reports_per_interaction_metrics():

@@ -73,6 +73,12 @@ class AgentConfig:
         updates_per_step: gradient updates per environment step; all updates of one
             interaction run as one fused ``lax.scan`` block.
         warmup_interactions: interactions with uniform random actions before learning starts.
+        random_interactions: after the warm-up, the probability that an interaction is played
+            with uniform random actions all the same (0 = never; the paper's agents explore
+            only through SAC's entropy). Which interactions is decided from the seed and the
+            interaction's index (``lili.train.plays_at_random``); they are trained on and
+            logged like the others. Measured on Drift, where the greedy policy never ends an
+            interaction on the side that influence needs (``benchmarks/README.md``).
         target_entropy: None = -|A| (SAC's default).
         init_alpha: initial temperature (0.1: the rewards here are O(0.05..1) per step, so
             SAC's usual 1.0 lets the entropy bonus swamp them for hundreds of interactions).
@@ -126,6 +132,7 @@ class AgentConfig:
     encoder_transitions: int | None = 16
     updates_per_step: float = 1.0
     warmup_interactions: int = 20
+    random_interactions: float = 0.0
     target_entropy: float | None = None
     init_alpha: float = 0.1
     phase_feature: bool = True
@@ -234,6 +241,7 @@ _NUMBERS: dict[str, tuple[Callable[[float], bool], str]] = {
         "init_alpha")},
     **{name: ((lambda v: v >= 0), "a finite number >= 0") for name in (
         "critic_to_encoder", "rep_weight", "latent_balance")},
+    "random_interactions": (lambda v: 0 <= v <= 1, "a number in [0, 1]"),
 }
 """Number fields: (test, what is allowed). Every number must also be finite and not a bool."""
 

@@ -24,7 +24,8 @@ import numpy as np
 from lili.agents.base import ActingState, Agent, CheckpointError
 from lili.buffer import InteractionBuffer
 
-__all__ = ["train", "rollout", "Interaction", "Stream", "NonFiniteError", "interaction_keys"]
+__all__ = ["train", "rollout", "Interaction", "Stream", "NonFiniteError", "interaction_keys",
+           "plays_at_random"]
 
 
 class NonFiniteError(ValueError):
@@ -94,6 +95,16 @@ def interaction_keys(seed: int, i: int) -> tuple[jax.Array, jax.Array]:
     """(acting key, update key) of interaction ``i``."""
     k = jax.random.fold_in(jax.random.PRNGKey(seed), i)
     return tuple(jax.random.split(k))  # type: ignore[return-value]
+
+
+def plays_at_random(seed: int, i: int, warmup: int, share: float) -> bool:
+    """Whether interaction ``i`` is played with uniform random actions: every warm-up
+    interaction, and after it each with probability ``share`` (``AgentConfig.
+    random_interactions``), decided from (seed, i) alone so that a resumed run and an
+    analysis of its records draw the same interactions."""
+    if i < warmup:
+        return True
+    return share > 0 and np.random.default_rng([seed, i, 1]).random() < share
 
 
 class Stream:
@@ -275,7 +286,8 @@ def train(
     try:
         for i in range(start, end):
             act_key, upd_key = interaction_keys(agent.seed, i)
-            if i < cfg.warmup_interactions:
+            if plays_at_random(agent.seed, i, cfg.warmup_interactions,
+                               cfg.random_interactions):
                 rng = np.random.default_rng([agent.seed, i])
 
                 def act(o, s, rng=rng):
