@@ -115,6 +115,31 @@ def test_the_intact_copy_resumes(run, tmp_path, capsys):
     assert len((folder / "metrics.csv").read_text().splitlines()) == 9
 
 
+def _drop_new_agent_fields(folder):
+    """config.yaml as a release before latent_kind, latent_balance and random_interactions
+    wrote it."""
+    path = folder / "config.yaml"
+    cfg = yaml.safe_load(path.read_text())
+    for name in ("latent_kind", "latent_balance", "random_interactions"):
+        del cfg["agent"][name]
+    path.write_text(yaml.safe_dump(cfg))
+
+
+def test_a_run_written_before_new_config_fields_resumes(run, tmp_path, capsys):
+    folder, args = _broken_copy(run, tmp_path, _drop_new_agent_fields)
+    assert cli.main(args) == 0
+    assert "resumed at interaction 6" in capsys.readouterr().out
+    # A field that the stored config sets otherwise is still a difference.
+    _, args = _broken_copy(run, tmp_path / "other", lambda f: None)
+    path = Path(args[args.index("--config") + 1])
+    other = tmp_path / "other.yaml"
+    other.write_text(yaml.safe_dump({**yaml.safe_load(path.read_text()),
+                                     "latent_kind": "categorical"}))
+    args[args.index("--config") + 1] = str(other)
+    assert cli.main(args) == 2
+    assert "agent differs" in capsys.readouterr().err
+
+
 class _Still:
     """A partner that never changes its mind (the test is about the observation)."""
 

@@ -20,7 +20,7 @@ from typing import Any
 import yaml
 
 __all__ = ["check_seed", "MAX_SEED", "AgentConfig", "load_config", "read_yaml", "yaml_value",
-           "BOUNDARY_MODES", "LATENT_KINDS", "extra_options"]
+           "BOUNDARY_MODES", "LATENT_KINDS", "extra_options", "stored_agent_config"]
 
 MAX_SEED = 2**32 - 1
 """Largest seed: NumPy's and JAX's generators take 32-bit seeds without folding them."""
@@ -203,6 +203,19 @@ class AgentConfig:
 
     def replace(self, **changes: Any) -> AgentConfig:
         return dataclasses.replace(self, **changes)
+
+
+def stored_agent_config(stored: Any) -> Any:
+    """A run folder's stored agent config (``config.yaml``'s ``agent``) with the fields added
+    since it was written set to their defaults, which are what it ran with (every new field
+    defaults to the behaviour before it): so a run of an earlier release resumes and counts as
+    done. Returned unchanged when it is not a valid config, for the caller to report."""
+    if not isinstance(stored, dict):
+        return stored
+    try:
+        return AgentConfig.from_dict(stored).to_dict()
+    except (ValueError, TypeError):
+        return stored
 
 
 def _bad(config: AgentConfig, name: str, allowed: str) -> ValueError:

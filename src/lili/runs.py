@@ -33,6 +33,7 @@ import yaml
 import lili
 from lili.agents import CheckpointError, load_agent
 from lili.agents.sac import SAC
+from lili.config import stored_agent_config
 from lili.train import Stream
 
 __all__ = ["RunLogger", "run_dir_for", "load_checkpoint", "METRIC_COLUMNS", "final_mean",
@@ -119,7 +120,7 @@ def read_run_config(run_dir: str | Path) -> dict[str, Any]:
     keys = ("env", "env_kwargs", "algo", "seed", "interactions", "agent")
     if not isinstance(cfg, dict) or any(k not in cfg for k in keys):
         raise ValueError(f"{path} is not a lili run config (it must map {', '.join(keys)})")
-    return cfg
+    return {**cfg, "agent": stored_agent_config(cfg["agent"])}
 
 
 def latest_checkpoint(run_dir: str | Path) -> tuple[Path, int]:

@@ -14,7 +14,7 @@ from typing import Any
 
 import yaml
 
-from lili.config import AgentConfig
+from lili.config import AgentConfig, stored_agent_config
 from lili.envs.core import resolve_env_id
 from lili.experiments.presets import PRESETS, Preset
 from lili.runs import run_dir_for
@@ -159,6 +159,8 @@ def run_status(spec: RunSpec) -> str:
             "seed": spec.seed, "agent": spec.agent}
     for key, value in want.items():
         have = old.get(key) if isinstance(old, dict) else None
+        if key == "agent":
+            have = stored_agent_config(have)
         if have != value:
             detail = _diff(have, value) if key == "agent" else f"{have!r} there, {value!r} here"
             raise ValueError(f"{folder} holds a run of another config ({key}: {detail}); "
