@@ -22,6 +22,10 @@ lagged observations that carry the same information about the partner's next goa
   scripted policies on the same prediction);
 - ``predicted-onehot``: the same prediction as one of eight indicators, the goals told
   apart but not in order (a test of whether order is what ``predicted`` has over the rest);
+- ``predicted-embedding``: the same prediction as a fixed random vector per goal, dense
+  and overlapping like a learned latent but fixed for every goal, produced yet or not (a
+  test of whether what the indicators have over a learned latent is that fixedness or
+  their orthogonality);
 - ``latent`` (with ``--latent-of RUN``): the latent that a trained LILI's encoder, frozen,
   computes from the last interaction, so that the latent's code is tested without the
   co-adaptation of encoder and policy.
@@ -135,6 +139,27 @@ class PredictedOneHotObservation(PredictedGoalObservation):
         return out
 
 
+EMBEDDING = (np.random.default_rng(0).normal(size=(len(GOALS), len(GOALS)))
+             / np.sqrt(len(GOALS))).astype(np.float32)
+"""The ``predicted-embedding`` variant's fixed vector per goal (row = goal index)."""
+
+
+class PredictedEmbeddingObservation(PredictedOneHotObservation):
+    """The same prediction as a fixed random vector per goal (:data:`EMBEDDING`; zeros before
+    the first interaction): named as fixedly as by the indicators, every goal the agent has
+    not produced yet included, but dense and overlapping like a learned latent."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        n = 1 + len(GOALS)
+        self.observation_space = spaces.Box(np.full(n, -np.inf, np.float32),
+                                            np.full(n, np.inf, np.float32), dtype=np.float32)
+
+    def _obs(self, obs: np.ndarray) -> np.ndarray:
+        hot = super()._obs(obs)
+        return np.concatenate([hot[:1], hot[1:] @ EMBEDDING])
+
+
 class FrozenLatentObservation(gym.Wrapper):
     """Append the latent that a trained LILI's encoder, frozen, computes from the last
     interaction (its ``initial_state()`` latent before the first): LILI's own latent as an
@@ -189,7 +214,8 @@ def frozen_latent(run: str) -> Callable[[gym.Env], gym.Env]:
 
 VARIANTS: dict[str, Callable[[gym.Env], gym.Env]] = {
     "position": LastInteractionObservation, "side": LastSideObservation,
-    "predicted": PredictedGoalObservation, "predicted-onehot": PredictedOneHotObservation}
+    "predicted": PredictedGoalObservation, "predicted-onehot": PredictedOneHotObservation,
+    "predicted-embedding": PredictedEmbeddingObservation}
 LATENT = "latent"  # the variant built from --latent-of (frozen_latent)
 
 

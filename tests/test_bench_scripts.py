@@ -132,19 +132,24 @@ def test_drift_predicted_goal_is_the_partners_goal_when_it_never_returns() -> No
     module = _script("drift_lagged")
     plain = module.PredictedGoalObservation(gym.make("lili/InfluenceDrift-v0", returns=0.0))
     onehot = module.PredictedOneHotObservation(gym.make("lili/InfluenceDrift-v0", returns=0.0))
+    embedded = module.PredictedEmbeddingObservation(
+        gym.make("lili/InfluenceDrift-v0", returns=0.0))
     rng = np.random.default_rng(0)
-    (obs, info), (hot, _) = plain.reset(seed=3), onehot.reset(seed=3)
-    assert obs[1] == 0.0 and not hot[1:].any()
+    (obs, info), (hot, _), (emb, _) = plain.reset(seed=3), onehot.reset(seed=3), \
+        embedded.reset(seed=3)
+    assert obs[1] == 0.0 and not hot[1:].any() and not emb[1:].any()
     for interaction in range(30):
         for _ in range(4):
             if interaction:
                 assert obs[1] == pytest.approx(info["strategy"][0])
                 assert module.GOALS[hot[1:].argmax()] == obs[1] and hot[1:].sum() == 1
+                np.testing.assert_allclose(emb[1:], module.EMBEDDING[hot[1:].argmax()])
             action = rng.uniform(-1, 1, 1)
             obs, _, terminated, truncated, info = plain.step(action)
             hot, *_ = onehot.step(action)
+            emb, *_ = embedded.step(action)
         assert truncated or terminated
-        (obs, info), (hot, _) = plain.reset(), onehot.reset()
+        (obs, info), (hot, _), (emb, _) = plain.reset(), onehot.reset(), embedded.reset()
 
 
 def test_drift_frozen_latent_is_the_latent_lili_acts_on(tmp_path: Path) -> None:
