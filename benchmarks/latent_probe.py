@@ -30,6 +30,9 @@ it gives the goal the nearest latent of the agent's own play names, and how far 
 lie from the agent's own (median distance to the nearest; own play against itself beside it),
 and how often a nearest-neighbour probe fitted on the first half of those interactions names
 the second half's goals (whether the latent tells them apart among themselves; 0.5 is chance).
+A fifth table plays 500 interactions of the agent's own policy with its exploration noise (as
+in training) and compares the latent's spread within one predicted goal with the distance
+between goals.
 Prints the tables and writes ``benchmarks/results/<--name>.json``.
 """
 
@@ -126,6 +129,32 @@ def own_spacing(z: np.ndarray) -> float:
     return float(np.median(d.min(1)))
 
 
+def spread(z: np.ndarray, labels: np.ndarray, least: int = 5) -> tuple[float, float]:
+    """(within, between): the median over labels with ``least`` or more rows of the RMS
+    distance of their latents to their centroid, and of the distance from their centroid to
+    the nearest other label's. within << between: the latent is a clean code of the label."""
+    keep = [lab for lab in np.unique(labels) if np.sum(labels == lab) >= least]
+    centres = np.array([z[labels == lab].mean(0) for lab in keep])
+    within = [np.sqrt(((z[labels == lab] - c) ** 2).sum(-1).mean())
+              for lab, c in zip(keep, centres, strict=True)]
+    d = np.sqrt(((centres[:, None] - centres[None]) ** 2).sum(-1))
+    np.fill_diagonal(d, np.inf)
+    between = d.min(1) if len(keep) > 1 else np.array([np.nan])
+    return float(np.median(within)), float(np.median(between))
+
+
+def noisy_latents(agent, env, n: int, seed: int = 12) -> tuple[np.ndarray, np.ndarray]:
+    """(latent, predicted goal id) of ``n`` interactions of the agent's own policy played
+    with its exploration noise, as in training."""
+    episodes = Episodes(agent, env, seed=seed, deterministic=False)
+    zs, ids, ends = [], [], []
+    for _ in range(n):
+        zs.append(np.asarray(episodes.acting.z, np.float32))
+        ids.append(int(episodes.info["strategy_id"]))
+        ends.append(float(episodes.play()["traj"]["next_obs"][-1][0]))
+    return np.asarray(zs)[1:], drift_predicted(np.asarray(ids), np.asarray(ends))[1:]
+
+
 def influencer_latents(agent, env_id: str, env_kwargs: dict, n: int = 400,
                        seed: int = 5) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(latent, goal id, end position) of ``n`` interactions played by the env's scripted
@@ -185,6 +214,8 @@ def probe(run: str, n: int) -> dict:
         predicted["influencer_apart"] = float(np.mean(
             nearest_label(zi[1:][:half], pred_i[:half], zi[1:][half:]) == pred_i[half:]))
         predicted["own_spacing"] = own_spacing(z[1:])
+        # How much the latent moves within one predicted goal under training's noisy actions.
+        predicted["noisy_spread"] = spread(*noisy_latents(agent, env, min(n, 500)))
     return {"recall_per_strategy": recall, "predicted": predicted, "run": run,
             "algo": cfg["algo"],
             "interactions_trained": int(cfg["interactions"]),
@@ -245,6 +276,15 @@ def main() -> None:
                 lines.append(f"| {r['run']} | {goal} ({total}) | {named} | "
                              f"{got['distance']:.3f} ({p['own_spacing']:.3f}) | "
                              f"{p['influencer_apart']:.2f} |")
+    if drift:
+        lines += ["", "Drift: the latent under the policy's exploration noise (500 "
+                  "interactions): spread within one predicted goal against the distance to "
+                  "the nearest other goal (medians over goals)", "",
+                  "| run | within | between | within / between |", "|---|---:|---:|---:|"]
+        for r in drift:
+            within, between = r["predicted"]["noisy_spread"]
+            lines.append(f"| {r['run']} | {within:.3f} | {between:.3f} | "
+                         f"{within / between:.2f} |")
     print("\n".join(lines))
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / f"{args.name}.json").write_text(json.dumps(rows, indent=1))

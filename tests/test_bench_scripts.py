@@ -93,6 +93,14 @@ def test_latent_probe_naming_of_latents_off_the_agents_own_play() -> None:
     assert script.own_spacing(np.array([[0.0], [0.5], [2.0]])) == pytest.approx(0.5)
 
 
+def test_latent_probe_spread_within_and_between_labels() -> None:
+    spread = _script("latent_probe").spread
+    z = np.array([[0.0, 0.0], [0.0, 0.2], [3.0, 0.0], [3.0, 0.2], [9.0, 9.0]])
+    labels = np.array([1, 1, 2, 2, 7])
+    # Label 7 has too few rows to count; 1 and 2 spread 0.1 around centres 3 apart.
+    assert spread(z, labels, least=2) == pytest.approx((0.1, 3.0))
+
+
 def test_latent_probe_scores_drift_against_the_predicted_goal() -> None:
     script = _script("latent_probe")
     ids = np.array([3, 4, 3, 4, 5, 6, 7, 7, 4, 3])
