@@ -26,6 +26,8 @@ lagged observations that carry the same information about the partner's next goa
   and overlapping like a learned latent but fixed for every goal, produced yet or not (a
   test of whether what the indicators have over a learned latent is that fixedness or
   their orthogonality);
+- ``predicted-embedding-noisy``: that vector plus Gaussian noise drawn once per interaction,
+  spread within a goal about as much as LILI's latents under exploration noise;
 - ``latent`` (with ``--latent-of RUN``): the latent that a trained LILI's encoder, frozen,
   computes from the last interaction, so that the latent's code is tested without the
   co-adaptation of encoder and policy.
@@ -160,6 +162,34 @@ class PredictedEmbeddingObservation(PredictedOneHotObservation):
         return np.concatenate([hot[:1], hot[1:] @ EMBEDDING])
 
 
+EMBEDDING_NOISE = 0.18
+"""Per-dimension std of ``predicted-embedding-noisy``'s noise: an RMS spread of 0.51, 0.66 of
+the median distance between neighbouring rows of :data:`EMBEDDING` (0.77), as LILI's latents
+spread within one predicted goal under exploration noise (0.42-1.29 of that distance)."""
+
+
+class NoisyEmbeddingObservation(PredictedEmbeddingObservation):
+    """:class:`PredictedEmbeddingObservation` plus Gaussian noise drawn once per interaction
+    (a latent is held for a whole interaction) from a generator seeded at ``reset(seed=...)``:
+    a fixed code that moves within a goal as a learned latent does."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self._rng, self._noise = np.random.default_rng(0), np.zeros(len(GOALS), np.float32)
+
+    def reset(self, **kwargs: Any):
+        if kwargs.get("seed") is not None:
+            self._rng = np.random.default_rng(kwargs["seed"])
+        self._noise = (self._rng.normal(size=len(GOALS)) * EMBEDDING_NOISE).astype(np.float32)
+        return super().reset(**kwargs)
+
+    def _obs(self, obs: np.ndarray) -> np.ndarray:
+        out = super()._obs(obs)
+        if self._predicted() is not None:
+            out[1:] += self._noise
+        return out
+
+
 class FrozenLatentObservation(gym.Wrapper):
     """Append the latent that a trained LILI's encoder, frozen, computes from the last
     interaction (its ``initial_state()`` latent before the first): LILI's own latent as an
@@ -215,7 +245,8 @@ def frozen_latent(run: str) -> Callable[[gym.Env], gym.Env]:
 VARIANTS: dict[str, Callable[[gym.Env], gym.Env]] = {
     "position": LastInteractionObservation, "side": LastSideObservation,
     "predicted": PredictedGoalObservation, "predicted-onehot": PredictedOneHotObservation,
-    "predicted-embedding": PredictedEmbeddingObservation}
+    "predicted-embedding": PredictedEmbeddingObservation,
+    "predicted-embedding-noisy": NoisyEmbeddingObservation}
 LATENT = "latent"  # the variant built from --latent-of (frozen_latent)
 
 

@@ -160,6 +160,35 @@ def test_drift_predicted_goal_is_the_partners_goal_when_it_never_returns() -> No
         (obs, info), (hot, _), (emb, _) = plain.reset(), onehot.reset(), embedded.reset()
 
 
+def test_drift_noisy_embedding_moves_between_interactions_only() -> None:
+    import gymnasium as gym
+
+    import lili.envs  # noqa: F401 - registers the envs
+
+    module = _script("drift_lagged")
+
+    def codes(seed: int) -> list[np.ndarray]:
+        clean = module.PredictedEmbeddingObservation(gym.make("lili/InfluenceDrift-v0"))
+        noisy = module.NoisyEmbeddingObservation(gym.make("lili/InfluenceDrift-v0"))
+        (c, _), (z, _) = clean.reset(seed=seed), noisy.reset(seed=seed)
+        out = []
+        for _ in range(6):
+            steps = []
+            for _ in range(4):
+                c, *_ = clean.step(np.array([0.5]))
+                z, *_ = noisy.step(np.array([0.5]))
+                steps.append(z[1:] - c[1:])
+            assert all(np.array_equal(steps[0], d) for d in steps)  # held for the interaction
+            out.append(steps[0])
+            (c, _), (z, _) = clean.reset(), noisy.reset()
+        return out
+
+    first = codes(3)
+    assert not first[0].any()  # nothing predicted in the first interaction, nothing added
+    assert all(np.std(d) > 0.05 for d in first[1:]) and not np.allclose(first[1], first[2])
+    assert all(np.array_equal(a, b) for a, b in zip(first, codes(3), strict=True))
+
+
 def test_drift_frozen_latent_is_the_latent_lili_acts_on(tmp_path: Path) -> None:
     """The ``latent`` variant appends, at every step of an interaction, the latent a trained
     LILI holds for it when it plays the same actions (:class:`lili.evaluate.Episodes`)."""
