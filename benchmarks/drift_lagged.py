@@ -49,6 +49,7 @@ import csv
 import json
 import time
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -173,14 +174,15 @@ class NoisyEmbeddingObservation(PredictedEmbeddingObservation):
     (a latent is held for a whole interaction) from a generator seeded at ``reset(seed=...)``:
     a fixed code that moves within a goal as a learned latent does."""
 
-    def __init__(self, env: gym.Env) -> None:
+    def __init__(self, env: gym.Env, noise: float = EMBEDDING_NOISE) -> None:
         super().__init__(env)
+        self.noise = noise
         self._rng, self._noise = np.random.default_rng(0), np.zeros(len(GOALS), np.float32)
 
     def reset(self, **kwargs: Any):
         if kwargs.get("seed") is not None:
             self._rng = np.random.default_rng(kwargs["seed"])
-        self._noise = (self._rng.normal(size=len(GOALS)) * EMBEDDING_NOISE).astype(np.float32)
+        self._noise = (self._rng.normal(size=len(GOALS)) * self.noise).astype(np.float32)
         return super().reset(**kwargs)
 
     def _obs(self, obs: np.ndarray) -> np.ndarray:
@@ -287,6 +289,9 @@ def main() -> None:
     p.add_argument("--seed-from", type=int, default=0, help="first seed (default 0)")
     p.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
                    help="agent-config field to change in every run (repeatable)")
+    p.add_argument("--embedding-noise", type=float, default=EMBEDDING_NOISE,
+                   help=f"per-dimension std of predicted-embedding-noisy's noise (default "
+                   f"{EMBEDDING_NOISE})")
     p.add_argument("--name", default="drift_lagged", help="results file stem")
     p.add_argument("--out", default=str(ROOT / "runs" / "drift_lagged"))
     args = p.parse_args()
@@ -301,7 +306,12 @@ def main() -> None:
         p.error(f"--seeds {args.seeds} is invalid; allowed: an integer >= 1")
     out = Path(args.out)
     seeds = range(args.seed_from, args.seed_from + args.seeds)
+    if not 0 <= args.embedding_noise < float("inf"):
+        p.error(f"--embedding-noise {args.embedding_noise} is invalid; allowed: a finite "
+                "number >= 0")
     wrappers = dict(VARIANTS)
+    wrappers["predicted-embedding-noisy"] = partial(NoisyEmbeddingObservation,
+                                                    noise=args.embedding_noise)
     if LATENT in args.variants:
         if not args.latent_of:
             p.error("--variants latent needs --latent-of RUN (a LILI run folder on " + ENV + ")")

@@ -189,6 +189,15 @@ def test_drift_noisy_embedding_moves_between_interactions_only() -> None:
     assert all(np.array_equal(a, b) for a, b in zip(first, codes(3), strict=True))
 
 
+@pytest.mark.parametrize("value", ["-0.1", "nan", "inf"])
+def test_drift_lagged_embedding_noise_is_checked(value: str, monkeypatch, capsys) -> None:
+    module = _script("drift_lagged")
+    monkeypatch.setattr("sys.argv", ["drift_lagged.py", "--embedding-noise", value])
+    with pytest.raises(SystemExit):
+        module.main()
+    assert f"--embedding-noise {float(value)} is invalid" in capsys.readouterr().err
+
+
 def test_drift_frozen_latent_is_the_latent_lili_acts_on(tmp_path: Path) -> None:
     """The ``latent`` variant appends, at every step of an interaction, the latent a trained
     LILI holds for it when it plays the same actions (:class:`lili.evaluate.Episodes`)."""
