@@ -54,11 +54,16 @@ from lili.evaluate import Episodes
 from lili.play.policy import agent_file_for_run
 
 
+def sq_dist(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Squared Euclidean distance between every row of ``a`` and every row of ``b``."""
+    return ((a[:, None, :] - b[None, :, :]) ** 2).sum(-1)
+
+
 def nearest_label(z_fit: np.ndarray, labels: np.ndarray, z: np.ndarray) -> np.ndarray:
     """The label of the nearest ``z_fit`` (squared Euclidean distance) for each row of ``z``;
     among equally near ones the commonest label (a categorical latent puts many interactions
     on exactly the same z, and the first of them need not be typical)."""
-    d = ((z[:, None, :] - z_fit[None, :, :]) ** 2).sum(-1)
+    d = sq_dist(z, z_fit)
     tied = d <= d.min(1, keepdims=True) + 1e-9
     values, index = np.unique(labels, return_inverse=True)
     votes = tied.astype(np.int64) @ np.eye(len(values), dtype=np.int64)[index]
@@ -112,7 +117,7 @@ def naming(z_fit: np.ndarray, labels_fit: np.ndarray, z: np.ndarray,
     """For each label of ``z``: which labels the nearest ``z_fit`` gives its rows (counts)
     and the median distance of its rows to the nearest ``z_fit``."""
     near = nearest_label(z_fit, labels_fit, z)
-    dist = np.sqrt(((z[:, None, :] - z_fit[None, :, :]) ** 2).sum(-1)).min(1)
+    dist = np.sqrt(sq_dist(z, z_fit)).min(1)
     out = {}
     for label in np.unique(labels):
         m = labels == label
@@ -124,7 +129,7 @@ def naming(z_fit: np.ndarray, labels_fit: np.ndarray, z: np.ndarray,
 
 def own_spacing(z: np.ndarray) -> float:
     """Median distance from each latent to the nearest other one."""
-    d = np.sqrt(((z[:, None, :] - z[None, :, :]) ** 2).sum(-1))
+    d = np.sqrt(sq_dist(z, z))
     np.fill_diagonal(d, np.inf)
     return float(np.median(d.min(1)))
 
@@ -137,22 +142,31 @@ def spread(z: np.ndarray, labels: np.ndarray, least: int = 5) -> tuple[float, fl
     centres = np.array([z[labels == lab].mean(0) for lab in keep])
     within = [np.sqrt(((z[labels == lab] - c) ** 2).sum(-1).mean())
               for lab, c in zip(keep, centres, strict=True)]
-    d = np.sqrt(((centres[:, None] - centres[None]) ** 2).sum(-1))
+    d = np.sqrt(sq_dist(centres, centres))
     np.fill_diagonal(d, np.inf)
     between = d.min(1) if len(keep) > 1 else np.array([np.nan])
     return float(np.median(within)), float(np.median(between))
 
 
+def own_play(episodes: Episodes, n: int) -> dict[str, np.ndarray]:
+    """Latent, partner strategy (``goal``, ``id``), end position and return of ``n``
+    interactions of ``episodes``' agent, the latent updated after each as in training."""
+    rows: dict[str, list] = {"z": [], "goal": [], "id": [], "end": [], "ret": []}
+    for _ in range(n):
+        rows["z"].append(np.asarray(episodes.acting.z, np.float32))
+        rows["goal"].append(float(episodes.info["strategy"][0]))
+        rows["id"].append(int(episodes.info.get("strategy_id", -1)))
+        done = episodes.play()
+        rows["ret"].append(float(done["ret"]))
+        rows["end"].append(float(done["traj"]["next_obs"][-1][0]))  # line envs observe [x]
+    return {k: np.asarray(v) for k, v in rows.items()}
+
+
 def noisy_latents(agent, env, n: int, seed: int = 12) -> tuple[np.ndarray, np.ndarray]:
     """(latent, predicted goal id) of ``n`` interactions of the agent's own policy played
     with its exploration noise, as in training."""
-    episodes = Episodes(agent, env, seed=seed, deterministic=False)
-    zs, ids, ends = [], [], []
-    for _ in range(n):
-        zs.append(np.asarray(episodes.acting.z, np.float32))
-        ids.append(int(episodes.info["strategy_id"]))
-        ends.append(float(episodes.play()["traj"]["next_obs"][-1][0]))
-    return np.asarray(zs)[1:], drift_predicted(np.asarray(ids), np.asarray(ends))[1:]
+    played = own_play(Episodes(agent, env, seed=seed, deterministic=False), n)
+    return played["z"][1:], drift_predicted(played["id"], played["end"])[1:]
 
 
 def influencer_latents(agent, env_id: str, env_kwargs: dict, n: int = 400,
@@ -183,15 +197,8 @@ def probe(run: str, n: int) -> dict:
     env = load_env_class(cfg["env"])(**cfg.get("env_kwargs", {}))
     agent = load_agent(path, env)
     episodes = Episodes(agent, env, seed=11)
-    zs, goals, ids, ends, returns = [], [], [], [], []
-    for _ in range(n):
-        zs.append(np.asarray(episodes.acting.z, np.float32))
-        goals.append(float(episodes.info["strategy"][0]))
-        ids.append(int(episodes.info.get("strategy_id", -1)))
-        done = episodes.play()
-        returns.append(float(done["ret"]))
-        ends.append(float(done["traj"]["next_obs"][-1][0]))  # the line envs observe [x]
-    z, g, end = np.asarray(zs), np.asarray(goals), np.asarray(ends)
+    played = own_play(episodes, n)
+    z, g, end, returns = played["z"], played["goal"], played["end"], played["ret"]
     x = np.c_[z, np.ones(n)]
     k = int(0.7 * n)
     w, *_ = np.linalg.lstsq(x[:k], g[:k], rcond=None)
@@ -200,7 +207,7 @@ def probe(run: str, n: int) -> dict:
     var = float(np.var(g[k:]))
     r2 = 1.0 - float(np.mean((x[k:] @ w - g[k:]) ** 2)) / var if var > 1e-12 else float("nan")
     knn, knn_rare, base = nearest_neighbour(z[:k], g[:k], z[k:], g[k:])
-    sid = np.asarray(ids)
+    sid = played["id"]
     # Discrete strategies (air hockey's modes): whether the latent tells each one apart.
     recall = recall_per_strategy(z[:k], sid[:k], z[k:], sid[k:]) if np.all(sid >= 0) else {}
     predicted = None
@@ -263,7 +270,6 @@ def main() -> None:
             p = r["predicted"]
             lines.append(f"| {r['run']} | {p['knn']:.2f} | {p['knn_near']:.2f} "
                          f"({p['near_count']}) | {', '.join(map(str, p['near_seen'])) or '—'} |")
-    if drift:
         lines += ["", "Drift: the goals the scripted influencer's interactions predict, named by "
                   "the nearest latent of the agent's own play", "",
                   "| run | predicted goal id (interactions) | named as (count) | distance to "
@@ -276,7 +282,6 @@ def main() -> None:
                 lines.append(f"| {r['run']} | {goal} ({total}) | {named} | "
                              f"{got['distance']:.3f} ({p['own_spacing']:.3f}) | "
                              f"{p['influencer_apart']:.2f} |")
-    if drift:
         lines += ["", "Drift: the latent under the policy's exploration noise (500 "
                   "interactions): spread within one predicted goal against the distance to "
                   "the nearest other goal (medians over goals)", "",
