@@ -8,6 +8,7 @@ import pytest
 
 import lili.envs  # noqa: F401  (registers the envs)
 from lili.agents import LILI, SAC, CheckpointError, Oracle, load_agent, make_agent
+from lili.agents.lili import bottleneck_kl, decoder_loss
 from lili.config import AgentConfig, load_config
 from lili.dists import tanh_gaussian
 
@@ -122,6 +123,35 @@ def test_categorical_latent_is_one_hot_and_the_encoder_learns_through_it():
     np.testing.assert_array_equal(acting, np.asarray(z)[0])
 
 
+def test_bottleneck_feeds_the_decoder_a_noisy_latent_and_prices_its_size():
+    env = gym.make("lili/PointMass-v0")
+    beta = 0.3
+    agent = LILI(env, SMALL.replace(latent_bottleneck=beta), seed=3)
+    core, state = agent.core, agent.state
+    batch = dict(_batch(agent, np.random.default_rng(1)), rep_key=jax.random.PRNGKey(7))
+    z = core._latents(state.model, state.target, state.norm, batch)[0]
+    eps = jax.random.normal(batch["rep_key"], z.shape)
+    want = (decoder_loss(core.decoder, state.model["decoder"], state.norm, batch, z + eps)
+            + beta * 0.5 * float((np.asarray(z) ** 2).sum(-1).mean()))
+    got = core._rep_loss(state.model, state.norm, batch, z)
+    np.testing.assert_allclose(float(got), float(want), rtol=1e-5)
+    # Another noise draw is another loss: the decoder really reads z + eps.
+    other = core._rep_loss(state.model, state.norm, dict(batch, rep_key=jax.random.PRNGKey(8)), z)
+    assert abs(float(other) - float(got)) > 1e-6
+    # The price alone pulls z toward 0: its gradient is beta * z.
+    g = jax.grad(lambda zz: beta * bottleneck_kl(zz))(z)
+    np.testing.assert_allclose(np.asarray(g), beta * np.asarray(z) / z.shape[0], rtol=1e-5)
+    # A whole update runs and differs from the run without the bottleneck.
+    plain = LILI(env, SMALL, seed=3)
+    batch.pop("rep_key")
+    s1, _ = core.update(state, batch, jax.random.PRNGKey(0))
+    s0, _ = plain.core.update(plain.state, batch, jax.random.PRNGKey(0))
+    # (Adam's first step is about lr * sign(gradient) per weight, so compare every weight.)
+    assert not all(np.allclose(a, b, atol=0) for a, b in zip(
+        jax.tree_util.tree_leaves(s1.model["encoder"]),
+        jax.tree_util.tree_leaves(s0.model["encoder"]), strict=True))
+
+
 def test_sac_bootstraps_from_the_next_interaction():
     env = gym.make("lili/PointMass-v0")
     agent = SAC(env, SMALL, seed=0)
@@ -202,6 +232,9 @@ def test_load_rejects_corrupt_and_mismatched_files(tmp_path):
     ({"latent_kind": "discrete"}, "latent_kind='discrete'.*continuous or categorical"),
     ({"random_interactions": 1.5}, r"random_interactions=1.5.*\[0, 1\]"),
     ({"latent_balance": -1}, "latent_balance=-1"),
+    ({"latent_bottleneck": -0.5}, "latent_bottleneck=-0.5"),
+    ({"latent_bottleneck": 1.0, "latent_kind": "categorical"},
+     "latent_bottleneck=1.0.*continuous latent"),
     ({"lr_actor": "fast"}, "lr_actor='fast'"),
     ({"warmup": 3}, "unknown config key"),
 ])

@@ -62,6 +62,14 @@ class AgentConfig:
         latent_balance: with a categorical latent, the weight in J_rep of log K - H of the
             batch's mean category probabilities (0 = off), which keeps the encoder from
             sending every interaction to one category (``lili.agents.lili.category_imbalance``).
+        latent_bottleneck: with a continuous latent, the weight beta of an information
+            bottleneck on z (0 = off, the paper): the decoder reads z + eps, eps ~ N(0, I), and
+            J_rep gains beta * |z|^2 / 2, the KL of N(z, I) from N(0, I) (a variational
+            bottleneck with unit posterior variance, as PEARL's KL on its task latent). Actor,
+            critic and acting use z itself. What z carries beyond the partner's next
+            strategy then costs J_rep without helping the decoder, so it shrinks: the spread
+            of z within one strategy, which on Drift stops a policy from learning to
+            influence (``benchmarks/README.md``, "Drift: a bottlenecked latent").
         history: number of past interactions the encoder reads (1 = the paper's LILI).
         batch_interactions, per_interaction: a batch is ``batch_interactions`` interactions
             with ``per_interaction`` transitions each (32 x 8 = 256, as in LILI's code), drawn
@@ -126,6 +134,7 @@ class AgentConfig:
     latent_dim: int = 8
     latent_kind: str = "continuous"
     latent_balance: float = 1.0
+    latent_bottleneck: float = 0.0
     history: int = 1
     batch_interactions: int = 32
     per_interaction: int = 8
@@ -180,6 +189,9 @@ class AgentConfig:
                        "default)")
         if not isinstance(self.latent_kind, str) or self.latent_kind not in LATENT_KINDS:
             raise _bad(self, "latent_kind", " or ".join(LATENT_KINDS))
+        if self.latent_bottleneck > 0 and self.latent_kind != "continuous":
+            raise _bad(self, "latent_bottleneck", "0 with latent_kind="
+                       f"{self.latent_kind!r} (the bottleneck is for a continuous latent)")
         _check_extra_shape(self.extra)
 
     @classmethod
@@ -253,7 +265,7 @@ _NUMBERS: dict[str, tuple[Callable[[float], bool], str]] = {
         "lr_actor", "lr_critic", "lr_alpha", "lr_encoder", "lr_decoder", "updates_per_step",
         "init_alpha")},
     **{name: ((lambda v: v >= 0), "a finite number >= 0") for name in (
-        "critic_to_encoder", "rep_weight", "latent_balance")},
+        "critic_to_encoder", "rep_weight", "latent_balance", "latent_bottleneck")},
     "random_interactions": (lambda v: 0 <= v <= 1, "a number in [0, 1]"),
 }
 """Number fields: (test, what is allowed). Every number must also be finite and not a bool."""

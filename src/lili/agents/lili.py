@@ -18,7 +18,9 @@ Exactly the semantics of DESIGN.md "LILI semantics":
 
 Latents inside the critic target come from a Polyak-averaged copy of the encoder (see
 ``AgentConfig.target_encoder``). With ``AgentConfig.latent_kind="categorical"`` z is the
-one-hot of E's largest output (a departure from the paper's continuous z, off by default).
+one-hot of E's largest output (a departure from the paper's continuous z, off by default);
+with ``AgentConfig.latent_bottleneck`` > 0 the decoder reads a noisy z and J_rep pays for z's
+size (an information bottleneck, also off by default).
 """
 
 from __future__ import annotations
@@ -27,14 +29,14 @@ import gymnasium as gym
 import jax
 import jax.numpy as jnp
 
-from lili.agents.base import Normaliser, Params
+from lili.agents.base import AgentState, Normaliser, Params
 from lili.agents.sac import SAC, SACCore, register, sg
 from lili.buffer import Batch, Window
 from lili.config import AgentConfig
 from lili.dists import unit_gaussian_nll
 from lili.nets import Decoder, Encoder, straight_through_one_hot
 
-__all__ = ["LILI", "LILICore", "decoder_loss", "category_imbalance"]
+__all__ = ["LILI", "LILICore", "decoder_loss", "category_imbalance", "bottleneck_kl"]
 
 
 def decoder_loss(decoder: Decoder, params: Params, norm: Normaliser, batch: Batch,
@@ -57,6 +59,14 @@ def category_imbalance(p: jax.Array) -> jax.Array:
     term spreads the batch over the categories so the decoder can tell them apart."""
     k = p.shape[-1]
     return jnp.log(k) + (p * jnp.log(jnp.maximum(p, 1e-12))).sum(-1)
+
+
+def bottleneck_kl(z: jax.Array) -> jax.Array:
+    """KL(N(z, I) || N(0, I)) = |z|^2 / 2, batch mean: the price of the information a
+    unit-variance Gaussian latent centred on ``z`` [B, L] carries. Paid together with a decoder
+    that reads z + eps, it leaves z only as large as the decoder needs, and shrinks what z
+    varies with but the decoder cannot use (``AgentConfig.latent_bottleneck``)."""
+    return 0.5 * (z ** 2).sum(-1).mean()
 
 
 class LILICore(SACCore):
@@ -110,8 +120,20 @@ class LILICore(SACCore):
         enc_t = target["encoder"] if self.config.target_encoder else sg(model["encoder"])
         return z, self._encode(enc_t, norm, prev), self._encode(enc_t, norm, nxt)
 
+    def update(self, state: AgentState, batch: Batch,
+               key: jax.Array) -> tuple[AgentState, dict[str, jax.Array]]:
+        if self.config.latent_bottleneck == 0:  # the key stream of every run before the option
+            return super().update(state, batch, key)
+        # The bottleneck's noise reaches _rep_loss in the batch, as LILAC's ELBO noise does.
+        k_rep, k_sac = jax.random.split(key)
+        return super().update(state, dict(batch, rep_key=k_rep), k_sac)
+
     def _rep_loss(self, model: Params, norm: Normaliser, batch: Batch, z: jax.Array) -> jax.Array:
-        loss = decoder_loss(self.decoder, model["decoder"], norm, batch, z)
+        beta = self.config.latent_bottleneck
+        z_read = z + jax.random.normal(batch["rep_key"], z.shape) if beta > 0 else z
+        loss = decoder_loss(self.decoder, model["decoder"], norm, batch, z_read)
+        if beta > 0:
+            loss = loss + beta * bottleneck_kl(z)
         if self.config.latent_kind == "categorical" and self.config.latent_balance > 0:
             prev = {k: v[:, :-1] for k, v in batch["window"].items()}
             p = jax.nn.softmax(self._encoder_out(model["encoder"], norm, prev), -1).mean(0)
