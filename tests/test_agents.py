@@ -152,6 +152,49 @@ def test_bottleneck_feeds_the_decoder_a_noisy_latent_and_prices_its_size():
         jax.tree_util.tree_leaves(s0.model["encoder"]), strict=True))
 
 
+def test_posterior_target_regresses_the_encoder_onto_the_next_interactions_own_code():
+    env = gym.make("lili/PointMass-v0")
+    agent = LILI(env, SMALL.replace(latent_target="posterior"), seed=3)
+    core, state = agent.core, agent.state
+    assert set(state.model) == {"critic", "encoder", "decoder", "posterior"}
+    assert "posterior" not in state.target  # no target copy: only J_rep reads P
+    batch = _batch(agent, np.random.default_rng(1))
+    z = core._latents(state.model, state.target, state.norm, batch)[0]
+    own = {k: v[:, -1:] for k, v in batch["window"].items()}
+    code = core.posterior.apply(state.model["posterior"], core._features(state.norm, own),
+                                own["weight"])
+    want = (float(((np.asarray(z) - np.asarray(code)) ** 2).sum(-1).mean())
+            + float(decoder_loss(core.decoder, state.model["decoder"], state.norm, batch, code)))
+    np.testing.assert_allclose(float(core._rep_loss(state.model, state.norm, batch, z)), want,
+                               rtol=1e-5)
+
+    # E learns only the regression (P detached in it); P and D only the decoder's loss.
+    def rep(model):
+        zz = core._latents(model, state.target, state.norm, batch)[0]
+        return core._rep_loss(model, state.norm, batch, zz)
+
+    grads = jax.grad(rep)(state.model)
+    moved = {k: any(float(jnp.abs(g).max()) > 0 for g in jax.tree_util.tree_leaves(grads[k]))
+             for k in ("encoder", "decoder", "posterior")}
+    assert moved == {"encoder": True, "decoder": True, "posterior": True}
+    only_e = jax.grad(lambda enc: ((core._latents(dict(state.model, encoder=enc), state.target,
+                                                  state.norm, batch)[0] - code) ** 2
+                                   ).sum(-1).mean())(state.model["encoder"])
+    for a, b in zip(jax.tree_util.tree_leaves(only_e),
+                    jax.tree_util.tree_leaves(grads["encoder"]), strict=True):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-4, atol=1e-7)
+    # The default keeps the paper's parameters (no P) and E's and D's initial weights.
+    plain = LILI(env, SMALL, seed=3)
+    assert set(plain.state.model) == {"critic", "encoder", "decoder"}
+    for k in ("encoder", "decoder"):
+        for a, b in zip(jax.tree_util.tree_leaves(plain.state.model[k]),
+                        jax.tree_util.tree_leaves(state.model[k]), strict=True):
+            np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    # One whole update runs.
+    new, metrics = core.update(state, batch, jax.random.PRNGKey(0))
+    assert np.isfinite(float(metrics["rep_loss"]))
+
+
 def test_sac_bootstraps_from_the_next_interaction():
     env = gym.make("lili/PointMass-v0")
     agent = SAC(env, SMALL, seed=0)
@@ -168,6 +211,12 @@ def test_sac_bootstraps_from_the_next_interaction():
     a, logp = tanh_gaussian(mean, log_std, key)
     v = core.critic.apply(st.target["critic"], x, a).min(0) - jnp.exp(st.log_alpha) * logp
     np.testing.assert_allclose(y, np.asarray(batch["rew"] + GAMMA * v), rtol=1e-5, atol=1e-5)
+    # boundary_gamma discounts the last step only; the other steps keep gamma.
+    other = SAC(env, SMALL.replace(boundary_gamma=0.3), seed=0)
+    y_b = np.asarray(other.core.critic_target(other.state, batch, key))
+    discount = np.where(np.asarray(batch["last"]), 0.3, GAMMA)
+    np.testing.assert_allclose(y_b, np.asarray(batch["rew"]) + discount * np.asarray(v),
+                               rtol=1e-5, atol=1e-5)
 
 
 def test_oracle_sees_the_strategy_and_lili_does_not():
@@ -226,6 +275,7 @@ def test_load_rejects_corrupt_and_mismatched_files(tmp_path):
 
 @pytest.mark.parametrize("bad, match", [
     ({"gamma": 1.5}, "gamma=1.5"),
+    ({"boundary_gamma": 1.0}, r"boundary_gamma=1.0.*\[0, 1\) or null"),
     ({"hidden": [0]}, "hidden"),
     ({"boundary": "sideways"}, "boundary='sideways'"),
     ({"latent_dim": 0}, "latent_dim=0"),
@@ -233,6 +283,9 @@ def test_load_rejects_corrupt_and_mismatched_files(tmp_path):
     ({"random_interactions": 1.5}, r"random_interactions=1.5.*\[0, 1\]"),
     ({"latent_balance": -1}, "latent_balance=-1"),
     ({"latent_bottleneck": -0.5}, "latent_bottleneck=-0.5"),
+    ({"latent_target": "prior"}, "latent_target='prior'.*decoder or posterior"),
+    ({"latent_target": "posterior", "latent_kind": "categorical"},
+     "latent_target='posterior'.*continuous latent"),
     ({"latent_bottleneck": 1.0, "latent_kind": "categorical"},
      "latent_bottleneck=1.0.*continuous latent"),
     ({"lr_actor": "fast"}, "lr_actor='fast'"),

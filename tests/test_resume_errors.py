@@ -116,11 +116,12 @@ def test_the_intact_copy_resumes(run, tmp_path, capsys):
 
 
 def _drop_new_agent_fields(folder):
-    """config.yaml as a release before latent_kind, latent_balance and random_interactions
-    wrote it."""
+    """config.yaml as a release before latent_kind, latent_balance, random_interactions,
+    latent_bottleneck, latent_target and boundary_gamma wrote it."""
     path = folder / "config.yaml"
     cfg = yaml.safe_load(path.read_text())
-    for name in ("latent_kind", "latent_balance", "random_interactions"):
+    for name in ("latent_kind", "latent_balance", "random_interactions", "latent_bottleneck",
+                 "latent_target", "boundary_gamma"):
         del cfg["agent"][name]
     path.write_text(yaml.safe_dump(cfg))
 

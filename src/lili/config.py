@@ -20,7 +20,8 @@ from typing import Any
 import yaml
 
 __all__ = ["check_seed", "MAX_SEED", "AgentConfig", "load_config", "read_yaml", "yaml_value",
-           "BOUNDARY_MODES", "LATENT_KINDS", "extra_options", "stored_agent_config"]
+           "BOUNDARY_MODES", "LATENT_KINDS", "LATENT_TARGETS", "extra_options",
+           "stored_agent_config"]
 
 MAX_SEED = 2**32 - 1
 """Largest seed: NumPy's and JAX's generators take 32-bit seeds without folding them."""
@@ -36,6 +37,7 @@ def check_seed(seed: Any, name: str = "seed") -> int:
 
 BOUNDARY_MODES = ("bootstrap", "influence", "cut", "same_z")
 LATENT_KINDS = ("continuous", "categorical")
+LATENT_TARGETS = ("decoder", "posterior")
 
 
 @dataclass(frozen=True)
@@ -45,6 +47,12 @@ class AgentConfig:
     Attributes:
         gamma: per-step discount, applied across interaction boundaries too (the stream of
             interactions goes on; 0.99**50 = 0.6 per Point Mass interaction).
+        boundary_gamma: the discount of an interaction's last step only, the one whose target
+            reaches into the next interaction (None = ``gamma``, the paper). Sets how much the
+            next interaction's value weighs without discounting the rewards within one;
+            0 gives the last step y = r, as ``boundary="cut"``. Measured on Lunar Lander,
+            where the pad does not depend on the ego and bootstrapping across the boundary
+            costs LILI against LILI (no influence) (``benchmarks/README.md``).
         tau: Polyak rate of the target critic (and the target encoder), every update.
         lr_actor, lr_critic, lr_alpha: Adam learning rates (SAC defaults).
         lr_encoder: encoder learning rate (critic and representation gradients).
@@ -70,6 +78,16 @@ class AgentConfig:
             strategy then costs J_rep without helping the decoder, so it shrinks: the spread
             of z within one strategy, which on Drift stops a policy from learning to
             influence (``benchmarks/README.md``, "Drift: a bottlenecked latent").
+        latent_target: what trains the encoder E. ``decoder`` (the paper): D(s, a, z^i)
+            predicts tau^i's transitions from z^i = E(tau^{i-1}). ``posterior``: a second
+            encoder P reads tau^i itself, D predicts tau^i from P(tau^i), and E is regressed
+            onto P(tau^i) (squared error, P detached), so z^i is the expected code of the
+            interaction to come. Both make z carry the next strategy; with ``posterior`` every
+            interaction that predicts the same next interaction has one target wherever it
+            came from, where with ``decoder`` any z that D decodes alike will do, so a rare
+            interaction (the one that influences) may be encoded off the latents of the
+            common ones and the critic must extrapolate its value. ``latent_bottleneck`` then
+            applies to P's code.
         history: number of past interactions the encoder reads (1 = the paper's LILI).
         batch_interactions, per_interaction: a batch is ``batch_interactions`` interactions
             with ``per_interaction`` transitions each (32 x 8 = 256, as in LILI's code), drawn
@@ -123,6 +141,7 @@ class AgentConfig:
     """
 
     gamma: float = 0.99
+    boundary_gamma: float | None = None
     tau: float = 0.005
     lr_actor: float = 3e-4
     lr_critic: float = 3e-4
@@ -135,6 +154,7 @@ class AgentConfig:
     latent_kind: str = "continuous"
     latent_balance: float = 1.0
     latent_bottleneck: float = 0.0
+    latent_target: str = "decoder"
     history: int = 1
     batch_interactions: int = 32
     per_interaction: int = 8
@@ -162,6 +182,9 @@ class AgentConfig:
         if self.target_entropy is not None:
             _set(self, "target_entropy", _number(self, "target_entropy", _ANY,
                                                  "a finite number or null (= -|A|)"))
+        if self.boundary_gamma is not None:
+            _set(self, "boundary_gamma", _number(self, "boundary_gamma", lambda v: 0 <= v < 1,
+                                                 "a number in [0, 1) or null (= gamma)"))
         if self.encoder_transitions is not None:
             _set(self, "encoder_transitions",
                  _integer(self, "encoder_transitions", 1, " or null (= all)"))
@@ -189,6 +212,11 @@ class AgentConfig:
                        "default)")
         if not isinstance(self.latent_kind, str) or self.latent_kind not in LATENT_KINDS:
             raise _bad(self, "latent_kind", " or ".join(LATENT_KINDS))
+        if not isinstance(self.latent_target, str) or self.latent_target not in LATENT_TARGETS:
+            raise _bad(self, "latent_target", " or ".join(LATENT_TARGETS))
+        if self.latent_target == "posterior" and self.latent_kind != "continuous":
+            raise _bad(self, "latent_target", "decoder with latent_kind="
+                       f"{self.latent_kind!r} (a posterior target is for a continuous latent)")
         if self.latent_bottleneck > 0 and self.latent_kind != "continuous":
             raise _bad(self, "latent_bottleneck", "0 with latent_kind="
                        f"{self.latent_kind!r} (the bottleneck is for a continuous latent)")

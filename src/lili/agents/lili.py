@@ -76,6 +76,8 @@ class LILICore(SACCore):
     default_boundary = "influence"
 
     def _latent_param_names(self) -> tuple[str, ...]:
+        if self.config.latent_target == "posterior":
+            return ("encoder", "decoder", "posterior")
         return ("encoder", "decoder")
 
     def _build(self) -> None:
@@ -83,6 +85,7 @@ class LILICore(SACCore):
         cfg = self.config
         self.encoder = Encoder(cfg.enc_hidden, cfg.latent_dim)
         self.decoder = Decoder(cfg.enc_hidden, self.obs_dim + 1)
+        self.posterior = Encoder(cfg.enc_hidden, cfg.latent_dim)
         self.feat_dim = 3 * self.obs_dim + self.act_dim + 3
 
     def _init_latent(self, key: jax.Array) -> dict[str, Params]:
@@ -91,7 +94,12 @@ class LILICore(SACCore):
         enc = self.encoder.init(ke, jnp.zeros((1, n, h, self.feat_dim)), jnp.ones((1, n, h)))
         dec = self.decoder.init(kd, jnp.zeros((1, self.obs_dim)), jnp.zeros((1, self.act_dim)),
                                 jnp.zeros((1, self.latent_dim)))
-        return {"encoder": enc, "decoder": dec}
+        if self.config.latent_target == "decoder":
+            return {"encoder": enc, "decoder": dec}
+        # A new key for P, so that E's and D's initial weights are those of the default.
+        post = self.posterior.init(jax.random.fold_in(key, 1), jnp.zeros((1, 1, h, self.feat_dim)),
+                                   jnp.ones((1, 1, h)))
+        return {"encoder": enc, "decoder": dec, "posterior": post}
 
     def _features(self, norm: Normaliser, win: Window) -> jax.Array:
         """Per-transition encoder input from window fields shaped [..., steps, ...]."""
@@ -130,10 +138,16 @@ class LILICore(SACCore):
 
     def _rep_loss(self, model: Params, norm: Normaliser, batch: Batch, z: jax.Array) -> jax.Array:
         beta = self.config.latent_bottleneck
-        z_read = z + jax.random.normal(batch["rep_key"], z.shape) if beta > 0 else z
-        loss = decoder_loss(self.decoder, model["decoder"], norm, batch, z_read)
+        code, loss = z, jnp.zeros(())
+        if self.config.latent_target == "posterior":
+            own = {k: v[:, -1:] for k, v in batch["window"].items()}  # tau^k, the batch's own
+            code = self.posterior.apply(model["posterior"], self._features(norm, own),
+                                        own["weight"])
+            loss = ((z - sg(code)) ** 2).sum(-1).mean()
+        read = code + jax.random.normal(batch["rep_key"], code.shape) if beta > 0 else code
+        loss = loss + decoder_loss(self.decoder, model["decoder"], norm, batch, read)
         if beta > 0:
-            loss = loss + beta * bottleneck_kl(z)
+            loss = loss + beta * bottleneck_kl(code)
         if self.config.latent_kind == "categorical" and self.config.latent_balance > 0:
             prev = {k: v[:, :-1] for k, v in batch["window"].items()}
             p = jax.nn.softmax(self._encoder_out(model["encoder"], norm, prev), -1).mean(0)

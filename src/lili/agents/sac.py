@@ -124,8 +124,12 @@ class SACCore:
                 "encoder": optax.adam(cfg.lr_encoder),
                 "decoder": optax.adam(cfg.lr_decoder),
             },
-            {"critic": "critic", **{k: k for k in self._latent_param_names()}},
+            {"critic": "critic",
+             **{k: self._OPTIMISER_OF.get(k, k) for k in self._latent_param_names()}},
         )
+
+    _OPTIMISER_OF = {"posterior": "encoder"}
+    """Latent parameter groups trained by another group's optimiser (same learning rate)."""
 
     def _latent_param_names(self) -> tuple[str, ...]:
         return ()
@@ -206,7 +210,8 @@ class SACCore:
         Within an interaction: y = r + gamma V(s', z^k). At its last step the next state is the
         first observation of interaction k+1 (phase 0), with the latent the boundary mode
         prescribes: E(tau^k) for ``influence``, z^k for ``same_z``, none for ``bootstrap``
-        (agents without latent); ``cut`` ends the return there (y = r). V(s, z) =
+        (agents without latent); ``cut`` ends the return there (y = r). The last step discounts
+        by ``boundary_gamma`` where it is set, every other step by ``gamma``. V(s, z) =
         min_j Qbar_j(s, a', z) - alpha log pi(a' | s, z), a' ~ pi(. | s, z). Target-side latents
         come from the target encoder.
         """
@@ -216,7 +221,10 @@ class SACCore:
         q_next = self.critic.apply(state.target["critic"], x_critic, a_next).min(0)
         v_next = q_next - jnp.exp(state.log_alpha) * logp_next
         cont = 1.0 - (batch["last"] & (self.boundary == "cut")).astype(jnp.float32)
-        return sg(batch["rew"] + self.config.gamma * cont * v_next)
+        cfg = self.config
+        gamma = cfg.gamma if cfg.boundary_gamma is None else jnp.where(
+            batch["last"], cfg.boundary_gamma, cfg.gamma)
+        return sg(batch["rew"] + gamma * cont * v_next)
 
     def _inputs(self, model: Params, state: AgentState, batch: Batch):
         """(critic input, actor input, z) at every transition's state ([B, M, .]).
