@@ -8,7 +8,7 @@ import pytest
 
 import lili.envs  # noqa: F401  (registers the envs)
 from lili.agents import LILI, SAC, CheckpointError, Oracle, load_agent, make_agent
-from lili.agents.lili import bottleneck_kl, decoder_loss
+from lili.agents.lili import bottleneck_kl, decoder_loss, window_part
 from lili.config import AgentConfig, load_config
 from lili.dists import tanh_gaussian
 
@@ -107,7 +107,7 @@ def test_categorical_latent_is_one_hot_and_the_encoder_learns_through_it():
         np.testing.assert_array_equal(latent.sum(-1), 1.0)
         assert set(np.unique(latent)) <= {0.0, 1.0}
     # The one-hot names the encoder's largest output ...
-    prev = {k: v[:, :-1] for k, v in batch["window"].items()}
+    prev = window_part(batch["window"], slice(None, -1))
     logits = core.encoder.apply(state.model["encoder"], core._features(state.norm, prev),
                                 prev["weight"])
     np.testing.assert_array_equal(np.argmax(np.asarray(z), -1), np.argmax(np.asarray(logits), -1))
@@ -160,7 +160,7 @@ def test_posterior_target_regresses_the_encoder_onto_the_next_interactions_own_c
     assert "posterior" not in state.target  # no target copy: only J_rep reads P
     batch = _batch(agent, np.random.default_rng(1))
     z = core._latents(state.model, state.target, state.norm, batch)[0]
-    own = {k: v[:, -1:] for k, v in batch["window"].items()}
+    own = window_part(batch["window"], slice(-1, None))
     code = core.posterior.apply(state.model["posterior"], core._features(state.norm, own),
                                 own["weight"])
     want = (float(((np.asarray(z) - np.asarray(code)) ** 2).sum(-1).mean())

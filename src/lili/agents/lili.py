@@ -36,7 +36,8 @@ from lili.config import AgentConfig
 from lili.dists import unit_gaussian_nll
 from lili.nets import Decoder, Encoder, straight_through_one_hot
 
-__all__ = ["LILI", "LILICore", "decoder_loss", "category_imbalance", "bottleneck_kl"]
+__all__ = ["LILI", "LILICore", "decoder_loss", "category_imbalance", "bottleneck_kl",
+           "window_part"]
 
 
 def decoder_loss(decoder: Decoder, params: Params, norm: Normaliser, batch: Batch,
@@ -59,6 +60,13 @@ def category_imbalance(p: jax.Array) -> jax.Array:
     term spreads the batch over the categories so the decoder can tell them apart."""
     k = p.shape[-1]
     return jnp.log(k) + (p * jnp.log(jnp.maximum(p, 1e-12))).sum(-1)
+
+
+def window_part(window: Window, part: slice) -> Window:
+    """The interactions ``part`` of a batch's windows ([B, N + 1, ...] -> [B, len, ...]): the
+    window holds k-N..k, so ``slice(None, -1)`` is E's input for z^k, ``slice(1, None)`` for
+    z^{k+1}, and ``slice(-1, None)`` interaction k itself."""
+    return {k: v[:, part] for k, v in window.items()}
 
 
 def bottleneck_kl(z: jax.Array) -> jax.Array:
@@ -122,8 +130,7 @@ class LILICore(SACCore):
 
     def _latents(self, model: Params, target: Params, norm: Normaliser, batch: Batch):
         win = batch["window"]
-        prev = {k: v[:, :-1] for k, v in win.items()}
-        nxt = {k: v[:, 1:] for k, v in win.items()}
+        prev, nxt = window_part(win, slice(None, -1)), window_part(win, slice(1, None))
         z = self._encode(model["encoder"], norm, prev)
         enc_t = target["encoder"] if self.config.target_encoder else sg(model["encoder"])
         return z, self._encode(enc_t, norm, prev), self._encode(enc_t, norm, nxt)
@@ -140,7 +147,7 @@ class LILICore(SACCore):
         beta = self.config.latent_bottleneck
         code, loss = z, jnp.zeros(())
         if self.config.latent_target == "posterior":
-            own = {k: v[:, -1:] for k, v in batch["window"].items()}  # tau^k, the batch's own
+            own = window_part(batch["window"], slice(-1, None))  # tau^k, the batch's own
             code = self.posterior.apply(model["posterior"], self._features(norm, own),
                                         own["weight"])
             loss = ((z - sg(code)) ** 2).sum(-1).mean()
@@ -149,7 +156,7 @@ class LILICore(SACCore):
         if beta > 0:
             loss = loss + beta * bottleneck_kl(code)
         if self.config.latent_kind == "categorical" and self.config.latent_balance > 0:
-            prev = {k: v[:, :-1] for k, v in batch["window"].items()}
+            prev = window_part(batch["window"], slice(None, -1))
             p = jax.nn.softmax(self._encoder_out(model["encoder"], norm, prev), -1).mean(0)
             loss = loss + self.config.latent_balance * category_imbalance(p)
         return loss
