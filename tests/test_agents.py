@@ -123,6 +123,39 @@ def test_categorical_latent_is_one_hot_and_the_encoder_learns_through_it():
     np.testing.assert_array_equal(acting, np.asarray(z)[0])
 
 
+def test_quantised_latent_is_a_codebook_vector_and_both_sides_learn():
+    env = gym.make("lili/PointMass-v0")
+    agent = LILI(env, SMALL.replace(latent_kind="quantised", latent_codes=5), seed=3)
+    core, state = agent.core, agent.state
+    codebook = np.asarray(state.model["encoder"]["params"]["codebook"])
+    assert codebook.shape == (5, SMALL.latent_dim)
+    assert "codebook" in state.target["encoder"]["params"]  # the Polyak copy carries it
+    batch = _batch(agent, np.random.default_rng(1))
+    z, zbar, zbar_next = core._latents(state.model, state.target, state.norm, batch)
+    prev = window_part(batch["window"], slice(None, -1))
+    e = np.asarray(core._encoder_out(state.model["encoder"], state.norm, prev))
+    nearest = codebook[((e[:, None] - codebook) ** 2).sum(-1).argmin(-1)]
+    np.testing.assert_allclose(np.asarray(z), nearest, rtol=1e-6, atol=1e-6)
+    for latent in (zbar, zbar_next):  # every latent is a row of the codebook
+        d = ((np.asarray(latent)[:, None] - codebook) ** 2).sum(-1).min(-1)
+        np.testing.assert_allclose(d, 0.0, atol=1e-10)
+    # J_rep moves the encoder (straight-through and commitment) and the codebook.
+    grads = jax.grad(lambda enc: core._rep_loss(
+        dict(state.model, encoder=enc), state.norm, batch,
+        core._latents(dict(state.model, encoder=enc), state.target, state.norm, batch)[0]))(
+        state.model["encoder"])
+    assert float(np.abs(np.asarray(grads["params"]["codebook"])).max()) > 0
+    assert any(float(jnp.abs(g).max()) > 0
+               for g in jax.tree_util.tree_leaves(grads["params"]["Encoder_0"]))
+    # Only the codes that name an output move.
+    used = set(((e[:, None] - codebook) ** 2).sum(-1).argmin(-1).tolist())
+    moved = {k for k in range(5) if np.abs(np.asarray(grads["params"]["codebook"])[k]).max() > 0}
+    assert moved == used
+    first = {k: v[0] for k, v in prev.items()}
+    np.testing.assert_allclose(np.asarray(core.jit_latent(state.model, state.norm, first)),
+                               np.asarray(z)[0], rtol=1e-6, atol=1e-6)
+
+
 def test_bottleneck_feeds_the_decoder_a_noisy_latent_and_prices_its_size():
     env = gym.make("lili/PointMass-v0")
     beta = 0.3
@@ -279,10 +312,11 @@ def test_load_rejects_corrupt_and_mismatched_files(tmp_path):
     ({"hidden": [0]}, "hidden"),
     ({"boundary": "sideways"}, "boundary='sideways'"),
     ({"latent_dim": 0}, "latent_dim=0"),
-    ({"latent_kind": "discrete"}, "latent_kind='discrete'.*continuous or categorical"),
+    ({"latent_kind": "discrete"}, "latent_kind='discrete'.*continuous, categorical, quantised"),
     ({"random_interactions": 1.5}, r"random_interactions=1.5.*\[0, 1\]"),
     ({"latent_balance": -1}, "latent_balance=-1"),
     ({"latent_bottleneck": -0.5}, "latent_bottleneck=-0.5"),
+    ({"latent_codes": 1}, "latent_codes=1.*integer >= 2"),
     ({"latent_target": "prior"}, "latent_target='prior'.*decoder or posterior"),
     ({"latent_target": "posterior", "latent_kind": "categorical"},
      "latent_target='posterior'.*continuous latent"),

@@ -36,7 +36,7 @@ def check_seed(seed: Any, name: str = "seed") -> int:
     return int(seed)
 
 BOUNDARY_MODES = ("bootstrap", "influence", "cut", "same_z")
-LATENT_KINDS = ("continuous", "categorical")
+LATENT_KINDS = ("continuous", "categorical", "quantised")
 LATENT_TARGETS = ("decoder", "posterior")
 
 
@@ -60,16 +60,23 @@ class AgentConfig:
         hidden: actor and critic hidden widths (paper: 2x256).
         enc_hidden: encoder and decoder hidden widths (paper: 2x128).
         latent_dim: size of z (paper: 8).
-        latent_kind: ``continuous`` (the paper: z is the encoder's linear output) or
-            ``categorical`` (z is the one-hot of the encoder's largest output, trained by the
-            straight-through estimator: forward the one-hot, backward the softmax's
-            gradient), so that z names one of ``latent_dim`` strategies. Measured on
+        latent_kind: ``continuous`` (the paper: z is the encoder's linear output),
+            ``quantised`` (see ``latent_codes``) or ``categorical`` (z is the one-hot of the
+            encoder's largest output, trained by the straight-through estimator: forward the
+            one-hot, backward the softmax's gradient), so that z names one of ``latent_dim``
+            strategies. Measured on
             ``lili/InfluenceDrift-v0``, where a policy learns to influence from the partner's
             predicted goal given as indicators but not from LILI's continuous latent
             (``benchmarks/README.md``, "Drift: what a lagged agent needs to influence").
         latent_balance: with a categorical latent, the weight in J_rep of log K - H of the
             batch's mean category probabilities (0 = off), which keeps the encoder from
             sending every interaction to one category (``lili.agents.lili.category_imbalance``).
+        latent_codes: with ``latent_kind="quantised"``, the size of the codebook: z is the
+            codebook vector nearest to E's output (straight-through gradient), and J_rep
+            gains the vector-quantisation losses |sg(e) - z|^2 + 0.25 |e - sg(z)|^2, which
+            pull the codes to the outputs they name and the outputs to their codes. Unlike
+            the categorical latent nothing spreads the batch over the codes, so the outputs
+            of one strategy can share one code: z is then exactly the same vector every time.
         latent_bottleneck: with a continuous latent, the weight beta of an information
             bottleneck on z (0 = off, the paper): the decoder reads z + eps, eps ~ N(0, I), and
             J_rep gains beta * |z|^2 / 2, the KL of N(z, I) from N(0, I) (a variational
@@ -153,6 +160,7 @@ class AgentConfig:
     latent_dim: int = 8
     latent_kind: str = "continuous"
     latent_balance: float = 1.0
+    latent_codes: int = 16
     latent_bottleneck: float = 0.0
     latent_target: str = "decoder"
     history: int = 1
@@ -211,7 +219,7 @@ class AgentConfig:
             raise _bad(self, "boundary", ", ".join(BOUNDARY_MODES) + " or null (the agent's "
                        "default)")
         if not isinstance(self.latent_kind, str) or self.latent_kind not in LATENT_KINDS:
-            raise _bad(self, "latent_kind", " or ".join(LATENT_KINDS))
+            raise _bad(self, "latent_kind", ", ".join(LATENT_KINDS))
         if not isinstance(self.latent_target, str) or self.latent_target not in LATENT_TARGETS:
             raise _bad(self, "latent_target", " or ".join(LATENT_TARGETS))
         if self.latent_target == "posterior" and self.latent_kind != "continuous":
@@ -299,7 +307,7 @@ _NUMBERS: dict[str, tuple[Callable[[float], bool], str]] = {
 """Number fields: (test, what is allowed). Every number must also be finite and not a bool."""
 
 _INTEGERS: dict[str, int] = {
-    "latent_dim": 1, "history": 1, "batch_interactions": 1, "per_interaction": 1,
+    "latent_dim": 1, "latent_codes": 2, "history": 1, "batch_interactions": 1, "per_interaction": 1,
     "warmup_interactions": 2, "buffer_capacity": 2, "checkpoint_every": 1,
 }
 """Integer fields and their lower bounds (``buffer_capacity`` has a further one)."""

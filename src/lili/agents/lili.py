@@ -34,10 +34,10 @@ from lili.agents.sac import SAC, SACCore, register, sg
 from lili.buffer import Batch, Window
 from lili.config import AgentConfig
 from lili.dists import unit_gaussian_nll
-from lili.nets import Decoder, Encoder, straight_through_one_hot
+from lili.nets import Decoder, Encoder, QuantisedEncoder, nearest_code, straight_through_one_hot
 
 __all__ = ["LILI", "LILICore", "decoder_loss", "category_imbalance", "bottleneck_kl",
-           "window_part"]
+           "quantisation_loss", "window_part"]
 
 
 def decoder_loss(decoder: Decoder, params: Params, norm: Normaliser, batch: Batch,
@@ -69,6 +69,14 @@ def window_part(window: Window, part: slice) -> Window:
     return {k: v[:, part] for k, v in window.items()}
 
 
+def quantisation_loss(e: jax.Array, codebook: jax.Array, commitment: float = 0.25) -> jax.Array:
+    """VQ-VAE's codebook and commitment terms for encoder outputs ``e`` [B, L]: the nearest
+    code moves to the outputs it names, and the outputs (weighted ``commitment``) to their code.
+    The decoder's gradient reaches ``e`` through the straight-through z, not the codes."""
+    q = nearest_code(sg(e), codebook)
+    return ((sg(e) - q) ** 2).sum(-1).mean() + commitment * ((e - sg(q)) ** 2).sum(-1).mean()
+
+
 def bottleneck_kl(z: jax.Array) -> jax.Array:
     """KL(N(z, I) || N(0, I)) = |z|^2 / 2, batch mean: the price of the information a
     unit-variance Gaussian latent centred on ``z`` [B, L] carries. Paid together with a decoder
@@ -92,6 +100,8 @@ class LILICore(SACCore):
         super()._build()
         cfg = self.config
         self.encoder = Encoder(cfg.enc_hidden, cfg.latent_dim)
+        if cfg.latent_kind == "quantised":
+            self.encoder = QuantisedEncoder(cfg.enc_hidden, cfg.latent_dim, cfg.latent_codes)
         self.decoder = Decoder(cfg.enc_hidden, self.obs_dim + 1)
         self.posterior = Encoder(cfg.enc_hidden, cfg.latent_dim)
         self.feat_dim = 3 * self.obs_dim + self.act_dim + 3
@@ -126,6 +136,8 @@ class LILICore(SACCore):
         out = self._encoder_out(enc, norm, win)
         if self.config.latent_kind == "categorical":
             return straight_through_one_hot(out)
+        if self.config.latent_kind == "quantised":
+            return out + sg(nearest_code(out, enc["params"]["codebook"]) - out)
         return out
 
     def _latents(self, model: Params, target: Params, norm: Normaliser, batch: Batch):
@@ -159,6 +171,10 @@ class LILICore(SACCore):
             prev = window_part(batch["window"], slice(None, -1))
             p = jax.nn.softmax(self._encoder_out(model["encoder"], norm, prev), -1).mean(0)
             loss = loss + self.config.latent_balance * category_imbalance(p)
+        if self.config.latent_kind == "quantised":
+            e = self._encoder_out(model["encoder"], norm, window_part(batch["window"],
+                                                                      slice(None, -1)))
+            loss = loss + quantisation_loss(e, model["encoder"]["params"]["codebook"])
         return loss
 
     def _act_latent(self, model: Params, norm: Normaliser, window: Window) -> jax.Array:
