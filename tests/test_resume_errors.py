@@ -117,11 +117,11 @@ def test_the_intact_copy_resumes(run, tmp_path, capsys):
 
 def _drop_new_agent_fields(folder):
     """config.yaml as a release before latent_kind, latent_balance, random_interactions,
-    latent_bottleneck, latent_target and boundary_gamma wrote it."""
+    latent_bottleneck, latent_target, boundary_gamma and latent_codes wrote it."""
     path = folder / "config.yaml"
     cfg = yaml.safe_load(path.read_text())
     for name in ("latent_kind", "latent_balance", "random_interactions", "latent_bottleneck",
-                 "latent_target", "boundary_gamma"):
+                 "latent_target", "boundary_gamma", "latent_codes"):
         del cfg["agent"][name]
     path.write_text(yaml.safe_dump(cfg))
 
