@@ -251,11 +251,8 @@ class LILACCore(SACCore):
                 "kl_context": kl[:, :n].mean()}
 
     # -- SAC hooks --------------------------------------------------------------------------------
-    def update(self, state: AgentState, batch: Batch,
-               key: jax.Array) -> tuple[AgentState, dict[str, jax.Array]]:
-        # The ELBO needs noise for z ~ q; the hooks get none, so it travels in the batch.
-        k_rep, k_sac = jax.random.split(key)
-        return super().update(state, dict(batch, rep_key=k_rep), k_sac)
+    def _rep_noise(self) -> bool:
+        return True  # the ELBO samples z ~ q
 
     def _latents(self, model: Params, target: Params, norm: Normaliser, batch: Batch):
         n = self.history

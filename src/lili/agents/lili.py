@@ -29,7 +29,7 @@ import gymnasium as gym
 import jax
 import jax.numpy as jnp
 
-from lili.agents.base import AgentState, Normaliser, Params
+from lili.agents.base import Normaliser, Params
 from lili.agents.sac import SAC, SACCore, register, sg
 from lili.buffer import Batch, Window
 from lili.config import AgentConfig
@@ -147,13 +147,9 @@ class LILICore(SACCore):
         enc_t = target["encoder"] if self.config.target_encoder else sg(model["encoder"])
         return z, self._encode(enc_t, norm, prev), self._encode(enc_t, norm, nxt)
 
-    def update(self, state: AgentState, batch: Batch,
-               key: jax.Array) -> tuple[AgentState, dict[str, jax.Array]]:
-        if self.config.latent_bottleneck == 0:  # the key stream of every run before the option
-            return super().update(state, batch, key)
-        # The bottleneck's noise reaches _rep_loss in the batch, as LILAC's ELBO noise does.
-        k_rep, k_sac = jax.random.split(key)
-        return super().update(state, dict(batch, rep_key=k_rep), k_sac)
+    def _rep_noise(self) -> bool:
+        # Only the bottleneck draws noise, so every run without it keeps its key stream.
+        return self.config.latent_bottleneck > 0
 
     def _rep_loss(self, model: Params, norm: Normaliser, batch: Batch, z: jax.Array) -> jax.Array:
         beta = self.config.latent_bottleneck

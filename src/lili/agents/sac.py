@@ -8,11 +8,12 @@ next acting state out), :meth:`~SACCore.block` (all gradient updates of one inte
 no env, no buffer and no state, so the same maths can be ``jax.vmap``-ed over seeds
 (:mod:`lili.agents.multiseed`) and driven step by step by evaluation or the play page.
 
-Latent agents subclass the core and override four hooks: :meth:`~SACCore._init_latent`
+Latent agents subclass the core and override its hooks: :meth:`~SACCore._init_latent`
 (parameters), :meth:`~SACCore._latents` (z for the batch, with gradient, plus the target-side
 latents), :meth:`~SACCore._rep_loss` (representation loss) and :meth:`~SACCore._act_latent` (the
-latent to act with). The critic target is written once, here, for every boundary mode (see
-``AgentConfig.boundary``).
+latent to act with); :meth:`~SACCore._rep_noise` says whether the representation loss draws
+noise (it then finds its key in the batch). The critic target is written once, here, for every
+boundary mode (see ``AgentConfig.boundary``).
 
 :class:`SAC` is the facade a user holds: ``SAC(env).learn(n).save(path)``, ``predict``,
 ``SAC.load(path, env)``. It owns the agent's state and, once it learns, the stream of
@@ -179,6 +180,11 @@ class SACCore:
     def _rep_loss(self, model: Params, norm: Normaliser, batch: Batch, z: jax.Array) -> jax.Array:
         return jnp.zeros(())
 
+    def _rep_noise(self) -> bool:
+        """Whether ``_rep_loss`` draws noise. The hooks get no key, so :meth:`update` then
+        splits one off its key and passes it in the batch as ``rep_key``."""
+        return False
+
     def _act_latent(self, model: Params, norm: Normaliser, window: Window) -> jax.Array:
         return jnp.zeros((0,))
 
@@ -244,6 +250,9 @@ class SACCore:
                key: jax.Array) -> tuple[AgentState, dict[str, jax.Array]]:
         """One gradient step of critic (and latent model), actor and temperature on ``batch``."""
         cfg = self.config
+        if self._rep_noise():
+            k_rep, key = jax.random.split(key)
+            batch = dict(batch, rep_key=k_rep)
         k_next, k_pi = jax.random.split(key)
         alpha = jnp.exp(state.log_alpha)
         norm = state.norm
