@@ -28,6 +28,9 @@ lagged observations that carry the same information about the partner's next goa
   their orthogonality);
 - ``predicted-embedding-noisy``: that vector plus Gaussian noise drawn once per interaction,
   spread within a goal about as much as LILI's latents under exploration noise;
+- ``noisy-in-critic`` / ``noisy-in-actor``: both codes side by side, the noisy one read by
+  the critic only (the actor reads the clean one) or by the actor only, which tells whether
+  the noise stops SAC through the values it learns or through the actions it takes;
 - ``latent`` (with ``--latent-of RUN``): the latent that a trained LILI's encoder, frozen,
   computes from the last interaction, so that the latent's code is tested without the
   co-adaptation of encoder and policy.
@@ -51,17 +54,21 @@ import time
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
+import jax
+import jax.numpy as jnp
 import numpy as np
 from _results import RESULTS, check_result_name
 from gymnasium import spaces
 
 import lili.envs  # noqa: F401 - registers the envs
 from lili.agents import SAC, load_agent
+from lili.agents.sac import SACCore
 from lili.buffer import InteractionBuffer
 from lili.cli import UsageError, parse_overrides
+from lili.dists import tanh_gaussian
 from lili.envs.influence import HELD
 from lili.envs.influence.drift import GOALS, drifted
 from lili.envs.wrappers import LastInteractionObservation
@@ -192,6 +199,78 @@ class NoisyEmbeddingObservation(PredictedEmbeddingObservation):
         return out
 
 
+class SplitNoisyEmbeddingObservation(NoisyEmbeddingObservation):
+    """Both codes side by side: x, the fixed code of the predicted goal, then that code plus
+    the interaction's noise. :class:`NoisyCriticSAC` and :class:`NoisyActorSAC` show each
+    network one of the two, so that the noise reaches only the critic or only the actor."""
+
+    def __init__(self, env: gym.Env, noise: float = EMBEDDING_NOISE) -> None:
+        super().__init__(env, noise)
+        n = 1 + 2 * len(GOALS)
+        self.observation_space = spaces.Box(np.full(n, -np.inf, np.float32),
+                                            np.full(n, np.inf, np.float32), dtype=np.float32)
+
+    def _obs(self, obs: np.ndarray) -> np.ndarray:
+        clean = PredictedEmbeddingObservation._obs(self, obs)
+        noisy = NoisyEmbeddingObservation._obs(self, obs)
+        return np.concatenate([clean, noisy[1:]])
+
+
+class _SplitCore(SACCore):
+    """SAC whose critic and actor read different codes of :class:`SplitNoisyEmbeddingObservation`:
+    ``noisy_in`` names the network that reads the noisy one; the other reads the clean one."""
+
+    noisy_in: ClassVar[str] = "critic"
+
+    def _view(self, x: jax.Array, noisy: bool) -> jax.Array:
+        n = len(GOALS)
+        code = x[..., 1 + n:1 + 2 * n] if noisy else x[..., 1:1 + n]
+        return jnp.concatenate([x[..., :1], code, x[..., 1 + 2 * n:]], -1)
+
+    def _views(self, x: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """(critic input, actor input) from the full input."""
+        return (self._view(x, self.noisy_in == "critic"),
+                self._view(x, self.noisy_in == "actor"))
+
+    def _input_dims(self) -> tuple[int, int]:
+        return self.x_dim - len(GOALS), self.x_dim - len(GOALS)
+
+    def _target_inputs(self, state, batch):
+        return self._views(super()._target_inputs(state, batch)[0])
+
+    def _inputs(self, model, state, batch):
+        x, _, z = super()._inputs(model, state, batch)
+        return (*self._views(x), z)
+
+    def _act(self, actor, norm, obs, acting, key, deterministic):
+        x = self._views(jnp.concatenate([self._x(norm, obs, acting.t), acting.z], -1))[1]
+        mean, log_std = self.actor.apply(actor, x)
+        a = jnp.tanh(mean) if deterministic else tanh_gaussian(mean, log_std, key)[0]
+        return a, acting.replace(t=acting.t + 1)
+
+
+class _NoisyCriticCore(_SplitCore):
+    noisy_in = "critic"
+
+
+class _NoisyActorCore(_SplitCore):
+    noisy_in = "actor"
+
+
+class NoisyCriticSAC(SAC):
+    """SAC on :class:`SplitNoisyEmbeddingObservation`: the critic reads the noisy code, the
+    actor the clean one."""
+
+    core_cls = _NoisyCriticCore
+
+
+class NoisyActorSAC(SAC):
+    """SAC on :class:`SplitNoisyEmbeddingObservation`: the actor reads the noisy code, the
+    critic the clean one."""
+
+    core_cls = _NoisyActorCore
+
+
 class FrozenLatentObservation(gym.Wrapper):
     """Append the latent that a trained LILI's encoder, frozen, computes from the last
     interaction (its ``initial_state()`` latent before the first): LILI's own latent as an
@@ -248,7 +327,13 @@ VARIANTS: dict[str, Callable[[gym.Env], gym.Env]] = {
     "position": LastInteractionObservation, "side": LastSideObservation,
     "predicted": PredictedGoalObservation, "predicted-onehot": PredictedOneHotObservation,
     "predicted-embedding": PredictedEmbeddingObservation,
-    "predicted-embedding-noisy": NoisyEmbeddingObservation}
+    "predicted-embedding-noisy": NoisyEmbeddingObservation,
+    "noisy-in-critic": SplitNoisyEmbeddingObservation,
+    "noisy-in-actor": SplitNoisyEmbeddingObservation}
+AGENTS: dict[str, type[SAC]] = {"noisy-in-critic": NoisyCriticSAC,
+                                "noisy-in-actor": NoisyActorSAC}
+"""Variants trained by another agent than plain SAC."""
+NOISY = ("predicted-embedding-noisy", "noisy-in-critic", "noisy-in-actor")
 LATENT = "latent"  # the variant built from --latent-of (frozen_latent)
 
 
@@ -259,7 +344,7 @@ def run(variant: str, wrap: Callable[[gym.Env], gym.Env], seed: int, n: int, out
     env = wrap(gym.make(ENV))
     rows: list[dict[str, Any]] = []
     t0 = time.process_time()
-    SAC(env, config=config or {}, seed=seed).learn(n, callback=rows.append)
+    AGENTS.get(variant, SAC)(env, config=config or {}, seed=seed).learn(n, callback=rows.append)
     cpu = time.process_time() - t0
     last = rows[-final_window(n):]
     final = float(np.mean([r["return"] for r in last]))
@@ -290,7 +375,7 @@ def main() -> None:
     p.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
                    help="agent-config field to change in every run (repeatable)")
     p.add_argument("--embedding-noise", type=float, default=EMBEDDING_NOISE,
-                   help=f"per-dimension std of predicted-embedding-noisy's noise (default "
+                   help=f"per-dimension std of the noise of the noisy variants (default "
                    f"{EMBEDDING_NOISE})")
     p.add_argument("--name", default="drift_lagged", help="results file stem")
     p.add_argument("--out", default=str(ROOT / "runs" / "drift_lagged"))
@@ -310,8 +395,8 @@ def main() -> None:
         p.error(f"--embedding-noise {args.embedding_noise} is invalid; allowed: a finite "
                 "number >= 0")
     wrappers = dict(VARIANTS)
-    wrappers["predicted-embedding-noisy"] = partial(NoisyEmbeddingObservation,
-                                                    noise=args.embedding_noise)
+    for v in NOISY:
+        wrappers[v] = partial(VARIANTS[v], noise=args.embedding_noise)
     if LATENT in args.variants:
         if not args.latent_of:
             p.error("--variants latent needs --latent-of RUN (a LILI run folder on " + ENV + ")")

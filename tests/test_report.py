@@ -374,6 +374,40 @@ def test_upto_compares_runs_at_one_budget(tmp_path: Path) -> None:
     assert full["returns"] == [FINAL_RETURN[PM]["lili"][0], FINAL_RETURN[PM]["lili"][1]]
 
 
+def test_policy_only_leaves_out_the_interactions_played_at_random(tmp_path: Path) -> None:
+    from lili.cli import main
+    from lili.train import plays_at_random
+
+    # Interactions drawn at random return -1 (their strategy id 1), the policy's return +1 (id 0):
+    # the policy's own final return is exactly 1, the run's as logged is lower.
+    n, warmup, share = 200, 5, 0.5
+    drawn = [i >= warmup and plays_at_random(3, i, warmup, share) for i in range(n)]
+    # The columns `lili train` writes (a config with an agent section is checked against them).
+    rows = [HEADER.replace("wall_time", "q,entropy,wall_time")] + [
+        f"{i},{-1.0 if d else 1.0},50,{int(not d)},0.0,,{int(d)},,,,,,,{0.01 * i}"
+        for i, d in enumerate(drawn)]
+    folder = _write_run(tmp_path, DR, "lili", 3, n=n, csv="\n".join(rows) + "\n")
+    config = yaml.safe_load((folder / "config.yaml").read_text())
+    config["agent"] = {"random_interactions": share, "warmup_interactions": warmup}
+    (folder / "config.yaml").write_text(yaml.safe_dump(config))
+    (run,) = find_runs([tmp_path])
+    assert run.random_draws.tolist() == drawn and 0 < sum(drawn) < n - warmup
+    assert final_performance(run) < 1.0
+    (policy,) = find_runs([tmp_path], policy_only=True)
+    assert final_performance(policy) == 1.0 and final_performance(policy, "success") == 1.0
+    assert strategy_frequencies([policy]).tolist() == [1.0]
+    # The warm-up is the policy's curve too; a run without random interactions is unchanged.
+    assert not policy.random_draws[:warmup].any()
+    assert policy.metrics["return"][:warmup].tolist() == run.metrics["return"][:warmup].tolist()
+    plain = _write_run(tmp_path / "plain", DR, "sac", 0)
+    (same,) = find_runs([plain], policy_only=True)
+    assert np.array_equal(same.metrics["return"], find_runs([plain])[0].metrics["return"])
+    out = tmp_path / "report"
+    assert main(["report", str(folder), "--policy-only", "--out", str(out)]) == 0
+    assert "interactions the policy played" in (out / "results.md").read_text()
+    assert json.loads((out / "results.json").read_text())["summary"][0]["returns"] == [1.0]
+
+
 @pytest.mark.parametrize("upto", [0, -5, 2.5, True])
 def test_bad_upto_raises(runs_dir: Path, upto) -> None:
     with pytest.raises(ValueError, match="upto must be a positive number"):

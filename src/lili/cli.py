@@ -218,7 +218,7 @@ def cmd_report(args: argparse.Namespace) -> int:
     if args.upto is not None and args.upto < 1:
         raise UsageError(f"--upto {args.upto} is invalid; allowed: an integer >= 1")
     out = Path(args.out) if args.out else Path(args.runs[0]) / "report"
-    summary = write_report(args.runs, out, upto=args.upto)
+    summary = write_report(args.runs, out, upto=args.upto, policy_only=args.policy_only)
     print(markdown_table(summary))
     print(f"figures and tables in {out}")
     return 0
@@ -288,6 +288,9 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--out", help="output folder (default RUN/report)")
     r.add_argument("--upto", type=int, metavar="N",
                    help="compare at one budget: use only each run's first N interactions")
+    r.add_argument("--policy-only", action="store_true",
+                   help="leave out the interactions training played at random after the "
+                        "warm-up (random_interactions), so runs are compared on their policies")
     r.set_defaults(func=cmd_report)
 
     from lili.experiments.presets import PRESETS

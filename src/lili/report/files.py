@@ -86,6 +86,40 @@ class Run:
             return None
         return np.stack([self.metrics[name] for _, name in cols], axis=1)
 
+    @property
+    def random_draws(self) -> np.ndarray:
+        """Per interaction, whether training played it with uniform random actions after the
+        warm-up (``AgentConfig.random_interactions``), recomputed from ``config.yaml`` with
+        :func:`lili.train.plays_at_random` as training drew them. All False without them."""
+        agent = self.config.get("agent")
+        agent = agent if isinstance(agent, dict) else {}
+        share = agent.get("random_interactions") or 0.0
+        n = self.n_interactions
+        if isinstance(share, bool) or not isinstance(share, (int, float)) or share <= 0:
+            return np.zeros(n, bool)
+        # Imported here: lili.train pulls in JAX, which reading CSV files does not need.
+        from lili.train import plays_at_random
+
+        warmup = int(agent.get("warmup_interactions") or 0)
+        return np.array([i >= warmup and plays_at_random(self.seed, i, warmup, float(share))
+                         for i in range(n)], bool)
+
+    def policy_only(self) -> Run:
+        """This run with the interactions played at random after the warm-up
+        (:attr:`random_draws`) left out of its statistics: their return, success and strategy
+        cells are empty (NaN), so final performance, success and the partner's strategies are
+        the policy's own. The warm-up stays (it is the start of every run's curve)."""
+        drawn = self.random_draws
+        if not drawn.any():
+            return self
+        metrics = dict(self.metrics)
+        for name, col in self.metrics.items():
+            if name in ("return", "success") or name == "strategy_id" \
+                    or _STRATEGY_RE.match(name):
+                metrics[name] = np.where(drawn, np.nan, col)
+        return Run(path=self.path, env=self.env, algo=self.algo, seed=self.seed,
+                   config=self.config, metrics=metrics)
+
     def truncated(self, upto: int) -> Run:
         """This run as it stood after its first ``upto`` interactions.
 
@@ -254,10 +288,13 @@ def _is_run_dir(folder: Path) -> bool:
     return (folder / METRICS_FILE).is_file() and (folder / CONFIG_FILE).is_file()
 
 
-def find_runs(paths: Sequence[str | Path], upto: int | None = None) -> list[Run]:
+def find_runs(paths: Sequence[str | Path], upto: int | None = None,
+              policy_only: bool = False) -> list[Run]:
     """Find and load every run folder at or below each of ``paths``.
 
-    With ``upto``, every run is cut to its first ``upto`` interactions (:meth:`Run.truncated`).
+    With ``upto``, every run is cut to its first ``upto`` interactions (:meth:`Run.truncated`);
+    with ``policy_only``, its interactions played at random are left out
+    (:meth:`Run.policy_only`).
 
     A path may be a run folder, any parent of run folders, or a run's ``metrics.csv`` /
     ``config.yaml``. Runs are returned sorted by (env, algo, seed, path); a folder reached from
@@ -307,6 +344,8 @@ def find_runs(paths: Sequence[str | Path], upto: int | None = None) -> list[Run]
                 f" allowed: 1 to {min(r.n_interactions for r in runs)}, so that every run is "
                 "compared at the same budget")
         runs = [run.truncated(upto) for run in runs]
+    if policy_only:
+        runs = [run.policy_only() for run in runs]
     seen: dict[tuple[str, str, int], Path] = {}
     for run in runs:
         key = (run.env, run.algo, run.seed)

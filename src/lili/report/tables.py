@@ -100,6 +100,8 @@ def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
             notes.append(f"Paper: {ref['text']}.")
         upto = rows[0].get("upto")
         window = f"the first {upto} interactions" if upto else "interactions"
+        if rows[0].get("policy_only"):
+            window += " the policy played (those played at random left out)"
         notes.append(
             f"Final = mean over the last 10% of {window} per seed; s.e. over seeds; "
             "gap closed = (R − R_SAC) / (R_Oracle − R_SAC)."

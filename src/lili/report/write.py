@@ -39,10 +39,13 @@ def json_safe(value: Any) -> Any:
 
 
 def write_report(paths: Sequence[str | Path], out_dir: str | Path,
-                 upto: int | None = None) -> dict[str, Any]:
+                 upto: int | None = None, policy_only: bool = False) -> dict[str, Any]:
     """Find runs under ``paths`` and write the report into ``out_dir`` (created if needed).
 
     ``upto`` compares every run at one budget: only its first ``upto`` interactions count.
+    ``policy_only`` leaves out the interactions that training played at random after the
+    warm-up (``AgentConfig.random_interactions``; :meth:`Run.policy_only`), so that runs with
+    and without them are compared on what their policies did.
 
     Files: ``curves.png`` (return), ``success.png`` (only if some env defines success),
     ``heatmap.png`` (only if there are Point Mass runs), ``strategies.png`` (only if some run
@@ -57,7 +60,7 @@ def write_report(paths: Sequence[str | Path], out_dir: str | Path,
     written then.
     """
     out_dir = check_out_dir(out_dir)
-    runs = find_runs(paths, upto)
+    runs = find_runs(paths, upto, policy_only)
     if not any(r.n_interactions for r in runs):
         raise ValueError(
             f"{', '.join(str(p) for p in paths)}: no run has logged an interaction yet"
@@ -66,6 +69,7 @@ def write_report(paths: Sequence[str | Path], out_dir: str | Path,
     summary = summarize(runs)
     for row in summary:
         row["upto"] = upto
+        row["policy_only"] = policy_only
     markdown = markdown_table(summary)
     files: dict[str, str] = {}
     files["curves.png"] = str(plot_learning_curves(runs, out_dir / "curves.png", "return"))
