@@ -31,6 +31,8 @@ lagged observations that carry the same information about the partner's next goa
 - ``noisy-in-critic`` / ``noisy-in-actor``: both codes side by side, the noisy one read by
   the critic only (the actor reads the clean one) or by the actor only, which tells whether
   the noise stops SAC through the values it learns or through the actions it takes;
+  ``noisy-in-q`` / ``noisy-in-target``: the noisy one read by the critic's Q input only or by
+  its bootstrap target only (the next state's critic input);
 - ``latent`` (with ``--latent-of RUN``): the latent that a trained LILI's encoder, frozen,
   computes from the last interaction, so that the latent's code is tested without the
   co-adaptation of encoder and policy.
@@ -201,7 +203,7 @@ class NoisyEmbeddingObservation(PredictedEmbeddingObservation):
 
 class SplitNoisyEmbeddingObservation(NoisyEmbeddingObservation):
     """Both codes side by side: x, the fixed code of the predicted goal, then that code plus
-    the interaction's noise. :class:`NoisyCriticSAC` and :class:`NoisyActorSAC` show each
+    the interaction's noise. The ``noisy-in-*`` variants (:class:`_SplitCore`) show each
     network one of the two, so that the noise reaches only the critic or only the actor."""
 
     def __init__(self, env: gym.Env, noise: float = EMBEDDING_NOISE) -> None:
@@ -217,8 +219,11 @@ class SplitNoisyEmbeddingObservation(NoisyEmbeddingObservation):
 
 
 class _SplitCore(SACCore):
-    """SAC whose critic and actor read different codes of :class:`SplitNoisyEmbeddingObservation`:
-    ``noisy_in`` names the network that reads the noisy one; the other reads the clean one."""
+    """SAC whose networks read different codes of :class:`SplitNoisyEmbeddingObservation`.
+
+    ``noisy_in`` says which input reads the noisy code (every other reads the clean one):
+    ``critic`` (the Q input and the bootstrap target's), ``q`` (the Q input only), ``target``
+    (the bootstrap target's critic input only) or ``actor`` (the actor, wherever it acts)."""
 
     noisy_in: ClassVar[str] = "critic"
 
@@ -227,48 +232,36 @@ class _SplitCore(SACCore):
         code = x[..., 1 + n:1 + 2 * n] if noisy else x[..., 1:1 + n]
         return jnp.concatenate([x[..., :1], code, x[..., 1 + 2 * n:]], -1)
 
-    def _views(self, x: jax.Array) -> tuple[jax.Array, jax.Array]:
-        """(critic input, actor input) from the full input."""
-        return (self._view(x, self.noisy_in == "critic"),
-                self._view(x, self.noisy_in == "actor"))
+    def _views(self, x: jax.Array, target: bool) -> tuple[jax.Array, jax.Array]:
+        """(critic input, actor input) from the full input, at the target side or not."""
+        critic_noisy = self.noisy_in in ("critic", "target" if target else "q")
+        return self._view(x, critic_noisy), self._view(x, self.noisy_in == "actor")
 
     def _input_dims(self) -> tuple[int, int]:
         return self.x_dim - len(GOALS), self.x_dim - len(GOALS)
 
     def _target_inputs(self, state, batch):
-        return self._views(super()._target_inputs(state, batch)[0])
+        return self._views(super()._target_inputs(state, batch)[0], target=True)
 
     def _inputs(self, model, state, batch):
         x, _, z = super()._inputs(model, state, batch)
-        return (*self._views(x), z)
+        return (*self._views(x, target=False), z)
 
     def _act(self, actor, norm, obs, acting, key, deterministic):
-        x = self._views(jnp.concatenate([self._x(norm, obs, acting.t), acting.z], -1))[1]
-        mean, log_std = self.actor.apply(actor, x)
+        x = jnp.concatenate([self._x(norm, obs, acting.t), acting.z], -1)
+        mean, log_std = self.actor.apply(actor, self._views(x, target=False)[1])
         a = jnp.tanh(mean) if deterministic else tanh_gaussian(mean, log_std, key)[0]
         return a, acting.replace(t=acting.t + 1)
 
 
-class _NoisyCriticCore(_SplitCore):
-    noisy_in = "critic"
+def _split_sac(noisy_in: str) -> type[SAC]:
+    """SAC on :class:`SplitNoisyEmbeddingObservation` with the noisy code in ``noisy_in``."""
+    core = type(f"_Noisy_{noisy_in}_Core", (_SplitCore,), {"noisy_in": noisy_in})
+    return type(f"Noisy_{noisy_in}_SAC", (SAC,), {"core_cls": core})
 
 
-class _NoisyActorCore(_SplitCore):
-    noisy_in = "actor"
-
-
-class NoisyCriticSAC(SAC):
-    """SAC on :class:`SplitNoisyEmbeddingObservation`: the critic reads the noisy code, the
-    actor the clean one."""
-
-    core_cls = _NoisyCriticCore
-
-
-class NoisyActorSAC(SAC):
-    """SAC on :class:`SplitNoisyEmbeddingObservation`: the actor reads the noisy code, the
-    critic the clean one."""
-
-    core_cls = _NoisyActorCore
+SPLITS = ("critic", "q", "target", "actor")
+"""Where the ``noisy-in-*`` variants put the noisy code (see :class:`_SplitCore`)."""
 
 
 class FrozenLatentObservation(gym.Wrapper):
@@ -328,12 +321,10 @@ VARIANTS: dict[str, Callable[[gym.Env], gym.Env]] = {
     "predicted": PredictedGoalObservation, "predicted-onehot": PredictedOneHotObservation,
     "predicted-embedding": PredictedEmbeddingObservation,
     "predicted-embedding-noisy": NoisyEmbeddingObservation,
-    "noisy-in-critic": SplitNoisyEmbeddingObservation,
-    "noisy-in-actor": SplitNoisyEmbeddingObservation}
-AGENTS: dict[str, type[SAC]] = {"noisy-in-critic": NoisyCriticSAC,
-                                "noisy-in-actor": NoisyActorSAC}
+    **{f"noisy-in-{where}": SplitNoisyEmbeddingObservation for where in SPLITS}}
+AGENTS: dict[str, type[SAC]] = {f"noisy-in-{where}": _split_sac(where) for where in SPLITS}
 """Variants trained by another agent than plain SAC."""
-NOISY = ("predicted-embedding-noisy", "noisy-in-critic", "noisy-in-actor")
+NOISY = ("predicted-embedding-noisy", *(f"noisy-in-{where}" for where in SPLITS))
 LATENT = "latent"  # the variant built from --latent-of (frozen_latent)
 
 

@@ -189,6 +189,35 @@ def test_drift_noisy_embedding_moves_between_interactions_only() -> None:
     assert all(np.array_equal(a, b) for a, b in zip(first, codes(3), strict=True))
 
 
+def test_drift_split_variants_show_each_input_the_code_it_names() -> None:
+    """The ``noisy-in-*`` variants slice one observation (x, clean code, noisy code, phase)
+    into the critic's and the actor's inputs: the noisy code goes only where the name says."""
+    import gymnasium as gym
+    import jax.numpy as jnp
+
+    import lili.envs  # noqa: F401 - registers the envs
+
+    module = _script("drift_lagged")
+    n = len(module.GOALS)
+    env = module.SplitNoisyEmbeddingObservation(gym.make(module.ENV), noise=0.3)
+    obs, _ = env.reset(seed=1)
+    for _ in range(4):
+        obs, *_ = env.step(np.array([0.5]))
+    obs, _ = env.reset()
+    clean, noisy = obs[1:1 + n], obs[1 + n:]
+    assert obs.shape == (1 + 2 * n,) and 0.05 < np.std(noisy - clean) < 1.0
+    x = jnp.concatenate([jnp.zeros(1), jnp.ones(n), 2 * jnp.ones(n), 3 * jnp.ones(1)])
+    expected = {  # (critic's Q input, critic's target input, actor) read the noisy code?
+        "critic": (True, True, False), "q": (True, False, False),
+        "target": (False, True, False), "actor": (False, False, True)}
+    for where, (q, target, actor) in expected.items():
+        core = module.AGENTS[f"noisy-in-{where}"](env, config={"hidden": [8]}).core
+        (c_in, a_in), (c_tg, a_tg) = core._views(x, target=False), core._views(x, target=True)
+        for view, noisy_code in ((c_in, q), (c_tg, target), (a_in, actor), (a_tg, actor)):
+            assert view.shape == (n + 2,) and view[0] == 0 and view[-1] == 3
+            assert np.all(np.asarray(view[1:-1]) == (2 if noisy_code else 1)), where
+
+
 @pytest.mark.parametrize("value", ["-0.1", "nan", "inf"])
 def test_drift_lagged_embedding_noise_is_checked(value: str, monkeypatch, capsys) -> None:
     module = _script("drift_lagged")
