@@ -114,8 +114,7 @@ class Run:
             return self
         metrics = dict(self.metrics)
         for name, col in self.metrics.items():
-            if name in ("return", "success") or name == "strategy_id" \
-                    or _STRATEGY_RE.match(name):
+            if name in ("return", "success", "strategy_id") or _STRATEGY_RE.match(name):
                 metrics[name] = np.where(drawn, np.nan, col)
         return Run(path=self.path, env=self.env, algo=self.algo, seed=self.seed,
                    config=self.config, metrics=metrics)
