@@ -250,6 +250,18 @@ def test_sac_bootstraps_from_the_next_interaction():
     discount = np.where(np.asarray(batch["last"]), 0.3, GAMMA)
     np.testing.assert_allclose(y_b, np.asarray(batch["rew"]) + discount * np.asarray(v),
                                rtol=1e-5, atol=1e-5)
+    # boundary_discount="horizon": an interaction that ended at step 20 of H still discounts
+    # the next one as if it had run to H; a full-length one (t = H - 1) as before.
+    early = dict(batch, t=batch["t"].at[1, 2].set(20))
+    padded = SAC(env, SMALL.replace(boundary_discount="horizon"), seed=0)
+    y_p = np.asarray(padded.core.critic_target(padded.state, early, key))
+    discount = np.full((2, 3), GAMMA)
+    discount[1, 2] = GAMMA ** (agent.horizon - 20)
+    assert agent.horizon - 20 > 10  # the extra discount is large enough to see
+    np.testing.assert_allclose(y_p, np.asarray(batch["rew"]) + discount * np.asarray(v),
+                               rtol=1e-5, atol=1e-5)
+    y_step = np.asarray(agent.core.critic_target(agent.state, early, key))
+    np.testing.assert_allclose(y_step, y, rtol=1e-6)  # the paper's discount ignores t there
 
 
 def test_oracle_sees_the_strategy_and_lili_does_not():
@@ -309,6 +321,7 @@ def test_load_rejects_corrupt_and_mismatched_files(tmp_path):
 @pytest.mark.parametrize("bad, match", [
     ({"gamma": 1.5}, "gamma=1.5"),
     ({"boundary_gamma": 1.0}, r"boundary_gamma=1.0.*\[0, 1\) or null"),
+    ({"boundary_discount": "episode"}, r"boundary_discount='episode'.*step or horizon"),
     ({"hidden": [0]}, "hidden"),
     ({"boundary": "sideways"}, "boundary='sideways'"),
     ({"latent_dim": 0}, "latent_dim=0"),

@@ -183,7 +183,7 @@ def test_a_run_written_before_new_agent_fields_counts_as_done(tmp_path: Path) ->
     _fake_run(spec, spec.interactions, spec.interactions)
     cfg = yaml.safe_load((spec.run_dir / "config.yaml").read_text())
     for name in ("latent_kind", "latent_balance", "random_interactions", "latent_bottleneck",
-                 "latent_target", "boundary_gamma", "latent_codes"):
+                 "latent_target", "boundary_gamma", "latent_codes", "boundary_discount"):
         del cfg["agent"][name]  # as a release before these fields wrote it
     (spec.run_dir / "config.yaml").write_text(yaml.safe_dump(cfg))
     assert run_status(spec) == "done"

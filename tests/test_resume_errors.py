@@ -117,11 +117,12 @@ def test_the_intact_copy_resumes(run, tmp_path, capsys):
 
 def _drop_new_agent_fields(folder):
     """config.yaml as a release before latent_kind, latent_balance, random_interactions,
-    latent_bottleneck, latent_target, boundary_gamma and latent_codes wrote it."""
+    latent_bottleneck, latent_target, boundary_gamma, latent_codes and boundary_discount
+    wrote it."""
     path = folder / "config.yaml"
     cfg = yaml.safe_load(path.read_text())
     for name in ("latent_kind", "latent_balance", "random_interactions", "latent_bottleneck",
-                 "latent_target", "boundary_gamma", "latent_codes"):
+                 "latent_target", "boundary_gamma", "latent_codes", "boundary_discount"):
         del cfg["agent"][name]
     path.write_text(yaml.safe_dump(cfg))
 

@@ -20,8 +20,8 @@ from typing import Any
 import yaml
 
 __all__ = ["check_seed", "MAX_SEED", "AgentConfig", "load_config", "read_yaml", "yaml_value",
-           "BOUNDARY_MODES", "LATENT_KINDS", "LATENT_TARGETS", "extra_options",
-           "stored_agent_config"]
+           "BOUNDARY_DISCOUNTS", "BOUNDARY_MODES", "LATENT_KINDS", "LATENT_TARGETS",
+           "extra_options", "stored_agent_config"]
 
 MAX_SEED = 2**32 - 1
 """Largest seed: NumPy's and JAX's generators take 32-bit seeds without folding them."""
@@ -37,6 +37,7 @@ def check_seed(seed: Any, name: str = "seed") -> int:
 
 BOUNDARY_MODES = ("bootstrap", "influence", "cut", "same_z")
 LATENT_KINDS = ("continuous", "categorical", "quantised")
+BOUNDARY_DISCOUNTS = ("step", "horizon")
 LATENT_TARGETS = ("decoder", "posterior")
 
 
@@ -53,6 +54,16 @@ class AgentConfig:
             0 gives the last step y = r, as ``boundary="cut"``. Measured on Lunar Lander,
             where the pad does not depend on the ego and bootstrapping across the boundary
             costs LILI against LILI (no influence) (``benchmarks/README.md``).
+        boundary_discount: how far away the next interaction is when one ends early.
+            ``step`` (the paper): every step discounts by ``gamma``, so an interaction that
+            ends at step t < H reaches the next one H - 1 - t steps sooner, and an agent that
+            bootstraps across the boundary is paid for ending interactions early (measured on
+            Lunar Lander, whose interactions end on contact: LILI, SAC and the Oracle land in
+            about 24 steps, LILI (no influence) in about 40). ``horizon``: the next
+            interaction is discounted as if this one had run to the horizon H, by an extra
+            ``gamma ** (H - 1 - t)`` at a last step at t, so when an interaction ends does not
+            change the next one's weight. The two are the same where every interaction runs
+            to H.
         tau: Polyak rate of the target critic (and the target encoder), every update.
         lr_actor, lr_critic, lr_alpha: Adam learning rates (SAC defaults).
         lr_encoder: encoder learning rate (critic and representation gradients).
@@ -149,6 +160,7 @@ class AgentConfig:
 
     gamma: float = 0.99
     boundary_gamma: float | None = None
+    boundary_discount: str = "step"
     tau: float = 0.005
     lr_actor: float = 3e-4
     lr_critic: float = 3e-4
@@ -218,6 +230,9 @@ class AgentConfig:
                                           or self.boundary not in BOUNDARY_MODES):
             raise _bad(self, "boundary", ", ".join(BOUNDARY_MODES) + " or null (the agent's "
                        "default)")
+        if (not isinstance(self.boundary_discount, str)
+                or self.boundary_discount not in BOUNDARY_DISCOUNTS):
+            raise _bad(self, "boundary_discount", " or ".join(BOUNDARY_DISCOUNTS))
         if not isinstance(self.latent_kind, str) or self.latent_kind not in LATENT_KINDS:
             raise _bad(self, "latent_kind", ", ".join(LATENT_KINDS))
         if not isinstance(self.latent_target, str) or self.latent_target not in LATENT_TARGETS:

@@ -217,9 +217,10 @@ class SACCore:
         first observation of interaction k+1 (phase 0), with the latent the boundary mode
         prescribes: E(tau^k) for ``influence``, z^k for ``same_z``, none for ``bootstrap``
         (agents without latent); ``cut`` ends the return there (y = r). The last step discounts
-        by ``boundary_gamma`` where it is set, every other step by ``gamma``. V(s, z) =
-        min_j Qbar_j(s, a', z) - alpha log pi(a' | s, z), a' ~ pi(. | s, z). Target-side latents
-        come from the target encoder.
+        by ``boundary_gamma`` where it is set, every other step by ``gamma``; with
+        ``boundary_discount="horizon"`` a last step at t < H - 1 also by ``gamma ** (H - 1 - t)``.
+        V(s, z) = min_j Qbar_j(s, a', z) - alpha log pi(a' | s, z), a' ~ pi(. | s, z).
+        Target-side latents come from the target encoder.
         """
         x_critic, x_actor = self._target_inputs(state, batch)
         mean, log_std = self.actor.apply(state.actor, x_actor)
@@ -230,6 +231,11 @@ class SACCore:
         cfg = self.config
         gamma = cfg.gamma if cfg.boundary_gamma is None else jnp.where(
             batch["last"], cfg.boundary_gamma, cfg.gamma)
+        if cfg.boundary_discount == "horizon":
+            # The steps an early end skipped still count, so ending sooner does not bring the
+            # next interaction's value closer.
+            skipped = (self.horizon - 1 - batch["t"]).astype(jnp.float32)
+            gamma = gamma * jnp.where(batch["last"], cfg.gamma ** skipped, 1.0)
         return sg(batch["rew"] + gamma * cont * v_next)
 
     def _inputs(self, model: Params, state: AgentState, batch: Batch):
