@@ -198,6 +198,20 @@ def test_markdown_table(runs_dir: Path) -> None:
     assert "| LILI | 3 | -0.25 ± 0.14 | 90.0% ± 5.8% | 0.50 | success near 100% |" in md
     assert "| Oracle | 3 | 0.00 ± 0.00 | 100.0% ± 0.0% | 1.00 | success near 100% |" in md
     assert PAPER[DR]["text"] in md
+    assert "Steps per interaction" not in md  # every interaction ran to H = 50
+
+
+def test_the_table_gives_the_steps_per_interaction_where_they_differ(tmp_path: Path) -> None:
+    # Interactions that end early: SAC's last 10 take 20 steps, LILI's seeds 30 and 40.
+    for algo, seed, final in (("sac", 0, 20), ("lili", 0, 30), ("lili", 1, 40)):
+        csv = "interaction,return,length\n" + "".join(
+            f"{i},-1.0,{final if i >= 90 else 60}\n" for i in range(100))
+        _write_run(tmp_path, DR, algo, seed, csv=csv)
+    summary = summarize(find_runs([tmp_path]))
+    lili = next(row for row in summary if row["algo"] == "lili")
+    assert (lili["length_mean"], lili["length_se"]) == (35.0, 5.0)
+    md = markdown_table(summary)
+    assert "Steps per interaction (final, mean ± s.e.): SAC 20.0, LILI 35.0 ± 5.0." in md
 
 
 def test_strategy_frequencies(runs_dir: Path, tmp_path: Path) -> None:

@@ -80,7 +80,9 @@ def summarize(runs: Iterable[Run], frac: float = 0.1) -> list[dict[str, Any]]:
     ``paper_gap_closed`` (None when the paper gives no number) and ``paper_text`` (None or the
     paper's qualitative statement), ``wall_time_mean`` (seconds per run, None without a
     ``wall_time`` column), ``paper_success`` (None or the paper's success rate) and
-    ``strategy_freq`` (see :func:`strategy_frequencies`; None without strategy ids).
+    ``strategy_freq`` (see :func:`strategy_frequencies`; None without strategy ids),
+    ``length_mean`` / ``length_se`` (final steps per interaction; None without a ``length``
+    column).
     s.e. = std(ddof=1) / sqrt(n), 0 with one seed. Runs with no
     interaction logged yet are left out.
     """
@@ -99,6 +101,8 @@ def summarize(runs: Iterable[Run], frac: float = 0.1) -> list[dict[str, Any]]:
             walls = [float(r.metrics["wall_time"][-1]) for r in group
                      if r.has_metric("wall_time")]
             freq = strategy_frequencies(group)
+            l_mean, l_se = mean_se([final_performance(r, "length", frac) for r in group
+                                    if r.has_metric("length")])
             env_rows.append({
                 "env": env,
                 "algo": algo,
@@ -120,6 +124,8 @@ def summarize(runs: Iterable[Run], frac: float = 0.1) -> list[dict[str, Any]]:
                 "wall_time_mean": float(np.mean(walls)) if walls else None,
                 "paper_success": paper.get("success", {}).get(algo),
                 "strategy_freq": None if freq is None else freq.tolist(),
+                "length_mean": l_mean,
+                "length_se": l_se,
             })
         means = {row["algo"]: row["return_mean"] for row in env_rows}
         for row in env_rows:

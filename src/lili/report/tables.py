@@ -93,6 +93,15 @@ def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
                                        for name, f in zip(names, row["strategy_freq"], strict=True))
                     notes.append(f"{algo_label(row['algo'])}: partner played {shares} over the "
                                  f"last {STRATEGY_WINDOW} interactions.")
+        lengths = [row for row in rows if row.get("length_mean") is not None]
+        # Only where interactions end early: there the length is part of what an agent learnt
+        # (an agent that bootstraps across the boundary is paid for ending sooner).
+        if len({round(row["length_mean"], 6) for row in lengths}) > 1:
+            shares = ", ".join(
+                f"{algo_label(row['algo'])} "
+                f"{fmt_mean_se(row['length_mean'], row['length_se'], '.1f', n=row['n'])}"
+                for row in lengths)
+            notes.append(f"Steps per interaction (final, mean ± s.e.): {shares}.")
         if "return" in ref:
             over = f" over {ref['seeds']} seeds" if "seeds" in ref else ""
             notes.append(f"Paper: final return{over} ({ref['source']}).")
