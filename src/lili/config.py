@@ -39,6 +39,9 @@ BOUNDARY_MODES = ("bootstrap", "influence", "cut", "same_z")
 LATENT_KINDS = ("continuous", "categorical", "quantised")
 BOUNDARY_DISCOUNTS = ("step", "horizon")
 LATENT_TARGETS = ("decoder", "posterior")
+# String fields with a fixed set of values: name -> (values, how the error message joins them).
+_CHOICES = {"boundary_discount": (BOUNDARY_DISCOUNTS, " or "), "latent_kind": (LATENT_KINDS, ", "),
+            "latent_target": (LATENT_TARGETS, " or ")}
 
 
 @dataclass(frozen=True)
@@ -230,13 +233,10 @@ class AgentConfig:
                                           or self.boundary not in BOUNDARY_MODES):
             raise _bad(self, "boundary", ", ".join(BOUNDARY_MODES) + " or null (the agent's "
                        "default)")
-        if (not isinstance(self.boundary_discount, str)
-                or self.boundary_discount not in BOUNDARY_DISCOUNTS):
-            raise _bad(self, "boundary_discount", " or ".join(BOUNDARY_DISCOUNTS))
-        if not isinstance(self.latent_kind, str) or self.latent_kind not in LATENT_KINDS:
-            raise _bad(self, "latent_kind", ", ".join(LATENT_KINDS))
-        if not isinstance(self.latent_target, str) or self.latent_target not in LATENT_TARGETS:
-            raise _bad(self, "latent_target", " or ".join(LATENT_TARGETS))
+        for name, (choices, sep) in _CHOICES.items():
+            value = getattr(self, name)
+            if not isinstance(value, str) or value not in choices:
+                raise _bad(self, name, sep.join(choices))
         if self.latent_target == "posterior" and self.latent_kind != "continuous":
             raise _bad(self, "latent_target", "decoder with latent_kind="
                        f"{self.latent_kind!r} (a posterior target is for a continuous latent)")

@@ -96,9 +96,9 @@ Choices where the appendix is silent (and why):
   also removes the reason that drove agents that bootstrap across the boundary (LILI) to hover
   to the horizon under the literal reading with early ends: the next interaction's value no
   longer carries the flight's large cost, so ending an interaction sooner does not look worse.
-  It now looks better: the next interaction is worth about +2.3, and under the paper's
+  It now looks better: each interaction to come is worth about +2.3, and under the paper's
   per-step discount an agent that bootstraps across the boundary (LILI, SAC, the Oracle)
-  reaches it sooner by ending sooner, so they land in about 24 steps where LILI (no
+  reaches their value sooner by ending sooner, so they land in about 24 steps where LILI (no
   influence) takes about 40, and LILI lands less often. ``AgentConfig(boundary_discount=
   "horizon")`` removes that pay (``benchmarks/README.md``, "Lunar Lander").
 - **Terrain and initial push.** Gymnasium draws them from its lander's ``np_random``. At every
