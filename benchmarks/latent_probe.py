@@ -32,7 +32,8 @@ and how often a nearest-neighbour probe fitted on the first half of those intera
 the second half's goals (whether the latent tells them apart among themselves; 0.5 is chance).
 A fifth table plays 500 interactions of the agent's own policy with its exploration noise (as
 in training) and compares the latent's spread within one predicted goal with the distance
-between goals.
+between goals, in z and in what z predicts (the decoder's means at the probe inputs that
+``AgentConfig(critic_latent="prediction")`` gives the critic).
 Prints the tables and writes ``benchmarks/results/<--name>.json``.
 """
 
@@ -221,8 +222,13 @@ def probe(run: str, n: int) -> dict:
         predicted["influencer_apart"] = float(np.mean(
             nearest_label(zi[1:][:half], pred_i[:half], zi[1:][half:]) == pred_i[half:]))
         predicted["own_spacing"] = own_spacing(z[1:])
-        # How much the latent moves within one predicted goal under training's noisy actions.
-        predicted["noisy_spread"] = spread(*noisy_latents(agent, env, min(n, 500)))
+        # How much the latent moves within one predicted goal under training's noisy actions,
+        # and how much what it predicts moves (the critic's code with
+        # critic_latent="prediction").
+        zn, goals = noisy_latents(agent, env, min(n, 500))
+        predicted["noisy_spread"] = spread(zn, goals)
+        code = agent.core.predictions(agent.state.model, np.asarray(zn, np.float32))
+        predicted["prediction_spread"] = spread(np.asarray(code), goals)
     return {"recall_per_strategy": recall, "predicted": predicted, "run": run,
             "algo": cfg["algo"],
             "interactions_trained": int(cfg["interactions"]),
@@ -285,11 +291,13 @@ def main() -> None:
         lines += ["", "Drift: the latent under the policy's exploration noise (500 "
                   "interactions): spread within one predicted goal against the distance to "
                   "the nearest other goal (medians over goals)", "",
-                  "| run | within | between | within / between |", "|---|---:|---:|---:|"]
+                  "| run | within | between | within / between | the same for what z predicts "
+                  "(D at the probe inputs) |", "|---|---:|---:|---:|---:|"]
         for r in drift:
             within, between = r["predicted"]["noisy_spread"]
+            p_within, p_between = r["predicted"]["prediction_spread"]
             lines.append(f"| {r['run']} | {within:.3f} | {between:.3f} | "
-                         f"{within / between:.2f} |")
+                         f"{within / between:.2f} | {p_within / p_between:.2f} |")
     print("\n".join(lines))
     RESULTS.mkdir(exist_ok=True)
     (RESULTS / f"{args.name}.json").write_text(json.dumps(rows, indent=1))

@@ -8,7 +8,7 @@ import pytest
 
 import lili.envs  # noqa: F401  (registers the envs)
 from lili.agents import LILI, SAC, CheckpointError, Oracle, load_agent, make_agent
-from lili.agents.lili import bottleneck_kl, decoder_loss, window_part
+from lili.agents.lili import PROBES, bottleneck_kl, decoder_loss, window_part
 from lili.config import AgentConfig, load_config
 from lili.dists import tanh_gaussian
 
@@ -228,6 +228,46 @@ def test_posterior_target_regresses_the_encoder_onto_the_next_interactions_own_c
     assert np.isfinite(float(metrics["rep_loss"]))
 
 
+def test_prediction_critic_reads_the_decoders_predictions_and_not_z():
+    env = gym.make("lili/PointMass-v0")
+    agent = LILI(env, SMALL.replace(critic_latent="prediction"), seed=3)
+    core, state = agent.core, agent.state
+    batch = _batch(agent, np.random.default_rng(1))
+    z, zbar, zbar_next = core._latents(state.model, state.target, state.norm, batch)
+    width = PROBES * (agent.obs_dim + 1)
+    x_q, x_pi, _ = core._inputs(state.model, state, batch)
+    assert x_pi.shape[-1] == core.x_dim and x_q.shape[-1] == core.x_dim - 3 + width
+    # The critic's latent part is D's prediction at the probe inputs, for every transition.
+    probe_s = jnp.broadcast_to(core.probe_obs, (2, PROBES, agent.obs_dim))
+    probe_a = jnp.broadcast_to(core.probe_act, (2, PROBES, agent.act_dim))
+    want = core.decoder.apply(state.model["decoder"], probe_s, probe_a,
+                              jnp.broadcast_to(z[:, None], (2, PROBES, 3))).reshape(2, -1)
+    np.testing.assert_allclose(np.asarray(x_q[:, 1, -width:]), np.asarray(want), rtol=1e-5,
+                               atol=1e-6)
+    np.testing.assert_array_equal(np.asarray(x_pi[..., -3:]),
+                                  np.broadcast_to(np.asarray(z)[:, None], (2, 3, 3)))
+    # At the boundary the target's critic reads the prediction of E_target(tau^k).
+    x_next, x_next_pi = core._target_inputs(state, batch)
+    code_next = np.asarray(core._critic_latent(state.model, zbar_next))
+    np.testing.assert_allclose(np.asarray(x_next[:, 2, -width:]), code_next, rtol=1e-6)
+    np.testing.assert_allclose(np.asarray(x_next_pi[:, 2, -3:]), np.asarray(zbar_next),
+                               rtol=1e-6)
+    # The critic loss no longer reaches E (with the default it does).
+    for kind, reaches in (("prediction", False), ("latent", True)):
+        a = LILI(env, SMALL.replace(critic_latent=kind, rep_weight=0.0), seed=3)
+        y = a.core.critic_target(a.state, batch, jax.random.PRNGKey(0))
+
+        def critic_loss(model, a=a, y=y):
+            x = a.core._inputs(model, a.state, batch)[0]
+            return ((a.core.critic.apply(model["critic"], x, batch["act"]) - y) ** 2).mean()
+
+        grads = jax.grad(critic_loss)(a.state.model)["encoder"]
+        assert any(float(jnp.abs(g).max()) > 0 for g in jax.tree_util.tree_leaves(grads)) \
+            == reaches, kind
+    new, metrics = core.update(state, batch, jax.random.PRNGKey(0))
+    assert np.isfinite(float(metrics["critic_loss"]))
+
+
 def test_sac_bootstraps_from_the_next_interaction():
     env = gym.make("lili/PointMass-v0")
     agent = SAC(env, SMALL, seed=0)
@@ -322,6 +362,7 @@ def test_load_rejects_corrupt_and_mismatched_files(tmp_path):
     ({"gamma": 1.5}, "gamma=1.5"),
     ({"boundary_gamma": 1.0}, r"boundary_gamma=1.0.*\[0, 1\) or null"),
     ({"boundary_discount": "episode"}, r"boundary_discount='episode'.*step or horizon"),
+    ({"critic_latent": "z"}, r"critic_latent='z'.*latent or prediction"),
     ({"hidden": [0]}, "hidden"),
     ({"boundary": "sideways"}, "boundary='sideways'"),
     ({"latent_dim": 0}, "latent_dim=0"),

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from _old_configs import drop_new_agent_fields
 
 from lili.cli import main
 from lili.experiments import PRESETS, get_preset, plan, run_status
@@ -181,10 +182,7 @@ def test_run_status_new_resume_done(tmp_path: Path) -> None:
 def test_a_run_written_before_new_agent_fields_counts_as_done(tmp_path: Path) -> None:
     (spec,) = plan(get_preset("point-mass"), tmp_path, quick=True, algos=("lili",))
     _fake_run(spec, spec.interactions, spec.interactions)
-    cfg = yaml.safe_load((spec.run_dir / "config.yaml").read_text())
-    for name in ("latent_kind", "latent_balance", "random_interactions", "latent_bottleneck",
-                 "latent_target", "boundary_gamma", "latent_codes", "boundary_discount"):
-        del cfg["agent"][name]  # as a release before these fields wrote it
+    cfg = drop_new_agent_fields(yaml.safe_load((spec.run_dir / "config.yaml").read_text()))
     (spec.run_dir / "config.yaml").write_text(yaml.safe_dump(cfg))
     assert run_status(spec) == "done"
 

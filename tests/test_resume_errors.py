@@ -10,6 +10,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import yaml
+from _old_configs import drop_new_agent_fields
 from gymnasium import spaces
 
 from lili import cli
@@ -116,15 +117,9 @@ def test_the_intact_copy_resumes(run, tmp_path, capsys):
 
 
 def _drop_new_agent_fields(folder):
-    """config.yaml as a release before latent_kind, latent_balance, random_interactions,
-    latent_bottleneck, latent_target, boundary_gamma, latent_codes and boundary_discount
-    wrote it."""
+    """config.yaml as a release before the newer agent fields wrote it."""
     path = folder / "config.yaml"
-    cfg = yaml.safe_load(path.read_text())
-    for name in ("latent_kind", "latent_balance", "random_interactions", "latent_bottleneck",
-                 "latent_target", "boundary_gamma", "latent_codes", "boundary_discount"):
-        del cfg["agent"][name]
-    path.write_text(yaml.safe_dump(cfg))
+    path.write_text(yaml.safe_dump(drop_new_agent_fields(yaml.safe_load(path.read_text()))))
 
 
 def test_a_run_written_before_new_config_fields_resumes(run, tmp_path, capsys):

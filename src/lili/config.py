@@ -39,9 +39,10 @@ BOUNDARY_MODES = ("bootstrap", "influence", "cut", "same_z")
 LATENT_KINDS = ("continuous", "categorical", "quantised")
 BOUNDARY_DISCOUNTS = ("step", "horizon")
 LATENT_TARGETS = ("decoder", "posterior")
+CRITIC_LATENTS = ("latent", "prediction")
 # String fields with a fixed set of values: name -> (values, how the error message joins them).
 _CHOICES = {"boundary_discount": (BOUNDARY_DISCOUNTS, " or "), "latent_kind": (LATENT_KINDS, ", "),
-            "latent_target": (LATENT_TARGETS, " or ")}
+            "latent_target": (LATENT_TARGETS, " or "), "critic_latent": (CRITIC_LATENTS, " or ")}
 
 
 @dataclass(frozen=True)
@@ -109,6 +110,16 @@ class AgentConfig:
             interaction (the one that influences) may be encoded off the latents of the
             common ones and the critic must extrapolate its value. ``latent_bottleneck`` then
             applies to P's code.
+        critic_latent: what of the partner the critic reads. ``latent`` (the paper): z itself.
+            ``prediction``: what z predicts, the decoder's means D(s_p, a_p, z) at 16 fixed
+            probe inputs (normalised states drawn from N(0, I) and actions from U(-1, 1) with
+            a fixed generator), detached, so the critic loss no longer shapes E
+            (``critic_to_encoder`` is then ignored). Two latents that the decoder reads alike
+            are then one critic input, however far apart they lie in z: on Drift a learned z
+            moves within one predicted strategy by about half the distance between strategies,
+            and a critic that reads a code which moves that much does not learn to influence
+            (``benchmarks/README.md``, "Drift: the noise stops SAC through the critic"). The
+            actor and acting still read z.
         history: number of past interactions the encoder reads (1 = the paper's LILI).
         batch_interactions, per_interaction: a batch is ``batch_interactions`` interactions
             with ``per_interaction`` transitions each (32 x 8 = 256, as in LILI's code), drawn
@@ -178,6 +189,7 @@ class AgentConfig:
     latent_codes: int = 16
     latent_bottleneck: float = 0.0
     latent_target: str = "decoder"
+    critic_latent: str = "latent"
     history: int = 1
     batch_interactions: int = 32
     per_interaction: int = 8

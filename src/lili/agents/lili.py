@@ -20,7 +20,9 @@ Latents inside the critic target come from a Polyak-averaged copy of the encoder
 ``AgentConfig.target_encoder``). With ``AgentConfig.latent_kind="categorical"`` z is the
 one-hot of E's largest output (a departure from the paper's continuous z, off by default);
 with ``AgentConfig.latent_bottleneck`` > 0 the decoder reads a noisy z and J_rep pays for z's
-size (an information bottleneck, also off by default).
+size (an information bottleneck, also off by default). With
+``AgentConfig.critic_latent="prediction"`` the critic reads what z predicts (the decoder at
+fixed probe inputs) instead of z (off by default).
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from __future__ import annotations
 import gymnasium as gym
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from lili.agents.base import Normaliser, Params
 from lili.agents.sac import SAC, SACCore, register, sg
@@ -37,7 +40,10 @@ from lili.dists import unit_gaussian_nll
 from lili.nets import Decoder, Encoder, QuantisedEncoder, nearest_code, straight_through_one_hot
 
 __all__ = ["LILI", "LILICore", "decoder_loss", "category_imbalance", "bottleneck_kl",
-           "quantisation_loss", "window_part"]
+           "quantisation_loss", "window_part", "PROBES"]
+
+PROBES = 16
+"""Probe inputs at which ``critic_latent="prediction"`` reads the decoder."""
 
 
 def decoder_loss(decoder: Decoder, params: Params, norm: Normaliser, batch: Batch,
@@ -105,6 +111,30 @@ class LILICore(SACCore):
         self.decoder = Decoder(cfg.enc_hidden, self.obs_dim + 1)
         self.posterior = Encoder(cfg.enc_hidden, cfg.latent_dim)
         self.feat_dim = 3 * self.obs_dim + self.act_dim + 3
+        self.critic_reads_code = cfg.critic_latent == "prediction"
+        # Fixed, so that a latent's code means the same at every update and in every run.
+        rng = np.random.default_rng(0)
+        self.probe_obs = rng.normal(size=(PROBES, self.obs_dim)).astype(np.float32)
+        self.probe_act = rng.uniform(-1, 1, size=(PROBES, self.act_dim)).astype(np.float32)
+
+    def _input_dims(self) -> tuple[int, int]:
+        if not self.critic_reads_code:
+            return super()._input_dims()
+        code = PROBES * (self.obs_dim + 1)
+        return self.x_dim - self.latent_dim + code, self.x_dim
+
+    def _critic_latent(self, model: Params, z: jax.Array) -> jax.Array:
+        return self.predictions(model, z)
+
+    def predictions(self, model: Params, z: jax.Array) -> jax.Array:
+        """What latents ``z`` [B, L] predict: D's (normalised) state change and reward at the
+        fixed probe inputs, [B, PROBES * (|S| + 1)], detached. The critic's code of z with
+        ``critic_latent="prediction"``."""
+        b = z.shape[0]
+        s = jnp.broadcast_to(self.probe_obs, (b, *self.probe_obs.shape))
+        a = jnp.broadcast_to(self.probe_act, (b, *self.probe_act.shape))
+        zb = jnp.broadcast_to(z[:, None, :], (b, PROBES, z.shape[-1]))
+        return sg(self.decoder.apply(model["decoder"], s, a, zb).reshape(b, -1))
 
     def _init_latent(self, key: jax.Array) -> dict[str, Params]:
         ke, kd = jax.random.split(key)

@@ -188,6 +188,15 @@ class SACCore:
     def _act_latent(self, model: Params, norm: Normaliser, window: Window) -> jax.Array:
         return jnp.zeros((0,))
 
+    critic_reads_code: bool = False
+    """Whether the critic reads :meth:`_critic_latent`'s code of z instead of z (set per
+    instance by a latent agent; LILI's ``critic_latent="prediction"``)."""
+
+    def _critic_latent(self, model: Params, z: jax.Array) -> jax.Array:
+        """The detached code of latents ``z`` [B, L] that the critic reads when
+        ``critic_reads_code`` ([B, C]; its width is in :meth:`_input_dims`)."""
+        return z
+
     # -- one gradient update ---------------------------------------------------------------
     def _with_z(self, x: jax.Array, z: jax.Array) -> jax.Array:
         """Append the per-interaction latent [B, L] to per-transition inputs [B, M, .]."""
@@ -203,12 +212,22 @@ class SACCore:
         norm = state.norm
         _, zbar, zbar_next = self._latents(state.model, state.target, norm, batch)
         zbar, zbar_next = sg(zbar), sg(zbar_next)
-        x_within = self._with_z(self._x(norm, batch["next_obs"], batch["t"] + 1), zbar)
+        x_next = self._next_x(norm, batch, zbar, zbar_next)
+        if not self.critic_reads_code:
+            return x_next, x_next
+        code = partial(self._critic_latent, state.model)
+        return self._next_x(norm, batch, code(zbar), code(zbar_next)), x_next
+
+    def _next_x(self, norm: Normaliser, batch: Batch, z: jax.Array,
+                z_next: jax.Array) -> jax.Array:
+        """The input at every transition's next state ([B, M, .]): the next observation and
+        phase with ``z`` (interaction k's latent), or at the last step the next interaction's
+        first observation with the boundary mode's latent (``z_next`` for ``influence``)."""
+        x_within = self._with_z(self._x(norm, batch["next_obs"], batch["t"] + 1), z)
         first = jnp.broadcast_to(batch["next_first_obs"][:, None], batch["obs"].shape)
-        z_boundary = zbar_next if self.boundary == "influence" else zbar
+        z_boundary = z_next if self.boundary == "influence" else z
         x_boundary = self._with_z(self._x(norm, first, 0.0), z_boundary)
-        x_next = jnp.where(batch["last"][..., None], x_boundary, x_within)
-        return x_next, x_next
+        return jnp.where(batch["last"][..., None], x_boundary, x_within)
 
     def critic_target(self, state: AgentState, batch: Batch, key: jax.Array) -> jax.Array:
         """The soft Bellman target y for every transition of ``batch`` ([B, M]).
@@ -248,7 +267,10 @@ class SACCore:
         """
         norm = state.norm
         z, _, _ = self._latents(model, state.target, norm, batch)
-        z_q = sg(z) + self.config.critic_to_encoder * (z - sg(z))
+        if self.critic_reads_code:
+            z_q = self._critic_latent(model, sg(z))
+        else:
+            z_q = sg(z) + self.config.critic_to_encoder * (z - sg(z))
         x = self._x(norm, batch["obs"], batch["t"])
         return self._with_z(x, z_q), self._with_z(x, sg(z)), z
 
