@@ -96,11 +96,15 @@ def test_same_z_reading_is_available_as_an_option():
     np.testing.assert_allclose(np.asarray(y), np.asarray(want), rtol=1e-5, atol=1e-5)
 
 
+def _point_mass_lili(**changes):
+    """A small Point Mass LILI (seed 3) with the config ``changes``, its core, its state and a
+    hand-made batch."""
+    agent = LILI(gym.make("lili/PointMass-v0"), SMALL.replace(**changes), seed=3)
+    return agent, agent.core, agent.state, _batch(agent, np.random.default_rng(1))
+
+
 def test_categorical_latent_is_one_hot_and_the_encoder_learns_through_it():
-    env = gym.make("lili/PointMass-v0")
-    agent = LILI(env, SMALL.replace(latent_kind="categorical"), seed=3)
-    core, state = agent.core, agent.state
-    batch = _batch(agent, np.random.default_rng(1))
+    agent, core, state, batch = _point_mass_lili(latent_kind="categorical")
     z, zbar, zbar_next = core._latents(state.model, state.target, state.norm, batch)
     for latent in (z, zbar, zbar_next):
         latent = np.asarray(latent)
@@ -229,10 +233,7 @@ def test_posterior_target_regresses_the_encoder_onto_the_next_interactions_own_c
 
 
 def test_prediction_critic_reads_the_decoders_predictions_and_not_z():
-    env = gym.make("lili/PointMass-v0")
-    agent = LILI(env, SMALL.replace(critic_latent="prediction"), seed=3)
-    core, state = agent.core, agent.state
-    batch = _batch(agent, np.random.default_rng(1))
+    agent, core, state, batch = _point_mass_lili(critic_latent="prediction")
     z, zbar, zbar_next = core._latents(state.model, state.target, state.norm, batch)
     width = PROBES * (agent.obs_dim + 1)
     x_q, x_pi, _ = core._inputs(state.model, state, batch)
@@ -254,7 +255,7 @@ def test_prediction_critic_reads_the_decoders_predictions_and_not_z():
                                rtol=1e-6)
     # The critic loss no longer reaches E (with the default it does).
     for kind, reaches in (("prediction", False), ("latent", True)):
-        a = LILI(env, SMALL.replace(critic_latent=kind, rep_weight=0.0), seed=3)
+        a = _point_mass_lili(critic_latent=kind, rep_weight=0.0)[0]
         y = a.core.critic_target(a.state, batch, jax.random.PRNGKey(0))
 
         def critic_loss(model, a=a, y=y):
