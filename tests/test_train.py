@@ -13,8 +13,10 @@ from lili import cli
 from lili.agents import LILI, SAC, Oracle
 from lili.config import AgentConfig
 from lili.evaluate import Episodes, evaluate
-from lili.runs import RunLogger
-from lili.train import Stream, plays_at_random, train
+from lili.report import find_runs
+from lili.report.stats import final_performance
+from lili.runs import RunLogger, final_window
+from lili.train import Stream, drawn_at_random, plays_at_random, train
 
 FAST = {"hidden": [32, 32], "enc_hidden": [16, 16], "latent_dim": 3, "warmup_interactions": 3,
         "checkpoint_every": 4, "batch_interactions": 8, "per_interaction": 4}
@@ -55,6 +57,7 @@ def test_run_folder_contents(tmp_path, cfg_file):
     summary = json.loads((run / "summary.json").read_text())
     assert summary["interactions"] == 6 and "jax" in summary["versions"]
     assert summary["final_return"] == float(rows[-1]["return"])
+    assert "final_return_policy" not in summary  # only runs with random interactions have it
     # CPU-seconds of the training (what lili.experiments.costs estimates from): at least the
     # compiles, and no more than wall time x the 2 cores' threads could spend (and then some).
     assert 0.5 < summary["cpu_time_s"] < 8 * summary["wall_time_s"] + 1
@@ -114,6 +117,31 @@ def test_random_interactions_are_drawn_from_the_seed_and_played_at_random():
         uniform = np.array([rng.uniform(-1.0, 1.0, 1) for _ in range(agent.horizon)])
         acts = np.asarray(buf.window(i, 1, None)["act"])[0]
         assert np.allclose(acts, uniform) == (i in chosen), i
+
+
+def test_summary_gives_the_policys_own_final_numbers_beside_all(tmp_path, capsys):
+    cfg = tmp_path / "random.yaml"
+    cfg.write_text(yaml.safe_dump({**FAST, "random_interactions": 0.5}))
+    n, warmup = 30, FAST["warmup_interactions"]
+    assert _train(tmp_path, str(cfg), algo="sac", n=n) == 0
+    run = tmp_path / "Driving2D-v0" / "sac" / "seed_0"
+    rows = _rows(run / "metrics.csv")
+    drawn = drawn_at_random(0, n, warmup, 0.5)
+    returns = np.array([float(r["return"]) for r in rows])
+    success = np.array([float(r["success"]) for r in rows])
+    own = ~drawn
+    k = final_window(int(own.sum()))  # the last 10% of the policy's own, as in the report
+    # The last 10% (3 interactions) of all and of the policy's own are different sets here.
+    assert drawn[-3:].any() and 0 < drawn.sum() < n - warmup
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["final_return"] == pytest.approx(returns[-3:].mean(), abs=1e-5)
+    assert summary["final_return_policy"] == pytest.approx(returns[own][-k:].mean(), abs=1e-5)
+    assert summary["final_success_policy"] == pytest.approx(success[own][-k:].mean())
+    # The report's --policy-only reads the same number from the run folder.
+    (policy,) = find_runs([run], policy_only=True)
+    assert final_performance(policy) == pytest.approx(summary["final_return_policy"], abs=1e-5)
+    assert f"the policy's own interactions: {summary['final_return_policy']:.3f}" in (
+        capsys.readouterr().out)
 
 
 def test_evaluate_reports_per_interaction_metrics():

@@ -173,6 +173,11 @@ def cmd_train(args: argparse.Namespace) -> int:
     line = f"final return (last 10%): {summary['final_return']:.3f}"
     if summary["final_success"] is not None:
         line += f", success {summary['final_success']:.2f}"
+    if summary.get("final_return_policy") is not None:
+        line += f" (the policy's own interactions: {summary['final_return_policy']:.3f}"
+        if summary["final_success_policy"] is not None:
+            line += f", success {summary['final_success_policy']:.2f}"
+        line += ")"
     print(line + f"; wall time {summary['wall_time_s']:.0f} s")
     return 0
 

@@ -135,8 +135,10 @@ class AgentConfig:
             with uniform random actions all the same (0 = never; the paper's agents explore
             only through SAC's entropy). Which interactions is decided from the seed and the
             interaction's index (``lili.train.plays_at_random``); they are trained on and
-            logged like the others. Measured on Drift, where the greedy policy never ends an
-            interaction on the side that influence needs (``benchmarks/README.md``).
+            logged like the others (``summary.json`` adds ``final_return_policy`` and
+            ``final_success_policy`` without them). Measured on Drift, where the greedy
+            policy never ends an interaction on the side that influence needs
+            (``benchmarks/README.md``).
         target_entropy: None = -|A| (SAC's default).
         init_alpha: initial temperature (0.1: the rewards here are O(0.05..1) per step, so
             SAC's usual 1.0 lets the entropy bonus swamp them for hundreds of interactions).

@@ -34,7 +34,7 @@ import lili
 from lili.agents import CheckpointError, load_agent
 from lili.agents.sac import SAC
 from lili.config import stored_agent_config
-from lili.train import Stream
+from lili.train import Stream, drawn_at_random
 
 __all__ = ["RunLogger", "run_dir_for", "load_checkpoint", "METRIC_COLUMNS", "final_mean",
            "final_window", "latest_checkpoint", "read_run_config", "metric_columns",
@@ -249,6 +249,8 @@ class RunLogger:
         self.returns = [float(r[1]) for r in rows]
         success = self.columns.index("success")
         self.successes = [float(r[success]) for r in rows if r[success] != ""]
+        # The interaction of each success, to leave out the ones played at random in finish().
+        self._success_at = [int(r[0]) for r in rows if r[success] != ""]
 
     def log(self, row: dict[str, Any], agent: SAC, stream: Stream) -> None:
         """Append one interaction's row; checkpoint every ``checkpoint_every`` interactions."""
@@ -268,6 +270,7 @@ class RunLogger:
         self.tb.add_scalar("interaction/return", row["return"], i)
         if success is not None:
             self.successes.append(float(success))
+            self._success_at.append(i)
             self.tb.add_scalar("interaction/success", float(success), i)
         for k in METRIC_COLUMNS:
             if k in row:
@@ -295,7 +298,13 @@ class RunLogger:
         return ck
 
     def finish(self, agent: SAC, stream: Stream, config: dict[str, Any]) -> dict[str, Any]:
-        """Final checkpoint and ``summary.json``."""
+        """Final checkpoint and ``summary.json``.
+
+        With ``AgentConfig.random_interactions`` the summary also holds
+        ``final_return_policy`` / ``final_success_policy``: the same final means over the
+        policy's own interactions (those played at random after the warm-up left out, as
+        ``lili report --policy-only`` does), since ``final_return`` counts every interaction.
+        """
         if stream.count % self.checkpoint_every != 0:
             self.checkpoint(agent, stream)
         summary = {
@@ -305,6 +314,7 @@ class RunLogger:
             "interactions": stream.count,
             "final_return": final_mean(self.returns) if self.returns else None,
             "final_success": final_mean(self.successes) if self.successes else None,
+            **self._policy_only(agent),
             "wall_time_s": round(stream.wall_time, 2),
             "cpu_time_s": (round(stream.cpu_time, 2) if np.isfinite(stream.cpu_time)
                            else None),
@@ -314,6 +324,19 @@ class RunLogger:
         (self.dir / "summary.json").write_text(json.dumps(summary, indent=2))
         self.close()
         return summary
+
+    def _policy_only(self, agent: SAC) -> dict[str, float | None]:
+        """The final means over the policy's own interactions; empty without random ones."""
+        cfg = agent.config
+        if cfg.random_interactions <= 0:
+            return {}
+        drawn = drawn_at_random(agent.seed, len(self.returns), cfg.warmup_interactions,
+                                cfg.random_interactions)
+        returns = [r for r, d in zip(self.returns, drawn, strict=True) if not d]
+        successes = [s for s, i in zip(self.successes, self._success_at, strict=True)
+                     if not drawn[i]]
+        return {"final_return_policy": final_mean(returns) if returns else None,
+                "final_success_policy": final_mean(successes) if successes else None}
 
     def close(self) -> None:
         self.tb.close()

@@ -25,7 +25,7 @@ from lili.agents.base import ActingState, Agent, CheckpointError
 from lili.buffer import InteractionBuffer
 
 __all__ = ["train", "rollout", "Interaction", "Stream", "NonFiniteError", "interaction_keys",
-           "plays_at_random"]
+           "plays_at_random", "drawn_at_random"]
 
 
 class NonFiniteError(ValueError):
@@ -105,6 +105,16 @@ def plays_at_random(seed: int, i: int, warmup: int, share: float) -> bool:
     if i < warmup:
         return True
     return share > 0 and np.random.default_rng([seed, i, 1]).random() < share
+
+
+def drawn_at_random(seed: int, n: int, warmup: int, share: float) -> np.ndarray:
+    """Per interaction ``0..n-1``, whether it was played at random *after* the warm-up
+    (:func:`plays_at_random`): the interactions a report of the policy's own play leaves out.
+    The warm-up stays in, since it starts every run's curve. All False when ``share <= 0``."""
+    if share <= 0:
+        return np.zeros(n, bool)
+    return np.array([i >= warmup and plays_at_random(seed, i, warmup, share)
+                     for i in range(n)], bool)
 
 
 class Stream:

@@ -90,7 +90,7 @@ class Run:
     def random_draws(self) -> np.ndarray:
         """Per interaction, whether training played it with uniform random actions after the
         warm-up (``AgentConfig.random_interactions``), recomputed from ``config.yaml`` with
-        :func:`lili.train.plays_at_random` as training drew them. All False without them."""
+        :func:`lili.train.drawn_at_random` as training drew them. All False without them."""
         agent = self.config.get("agent")
         agent = agent if isinstance(agent, dict) else {}
         share = agent.get("random_interactions") or 0.0
@@ -98,11 +98,10 @@ class Run:
         if isinstance(share, bool) or not isinstance(share, (int, float)) or share <= 0:
             return np.zeros(n, bool)
         # Imported here: lili.train pulls in JAX, which reading CSV files does not need.
-        from lili.train import plays_at_random
+        from lili.train import drawn_at_random
 
         warmup = int(agent.get("warmup_interactions") or 0)
-        return np.array([i >= warmup and plays_at_random(self.seed, i, warmup, float(share))
-                         for i in range(n)], bool)
+        return drawn_at_random(self.seed, n, warmup, float(share))
 
     def policy_only(self) -> Run:
         """This run with the interactions played at random after the warm-up
