@@ -82,6 +82,39 @@ def test_set_overrides_every_run_and_is_checked(tmp_path: Path, capsys) -> None:
     assert not out.exists()
 
 
+def test_env_kwarg_sets_every_run_and_is_checked(tmp_path: Path, capsys) -> None:
+    specs = plan(get_preset("influence"), tmp_path, envs=("influence-drift",),
+                 env_kwargs={"returns": 0.0})
+    assert specs and {s.env_kwargs["returns"] for s in specs} == {0.0}
+    # Over the preset's own options, not in place of them.
+    base = plan(get_preset("history"), tmp_path, algos=("lili",))
+    kept = plan(get_preset("history"), tmp_path, algos=("lili",), env_kwargs={"step_noise": 0.1})
+    assert any(s.env_kwargs for s in base)
+    assert [s.env_kwargs for s in kept] == [{**s.env_kwargs, "step_noise": 0.1} for s in base]
+    out = tmp_path / "out"
+    for argv, message in [
+            (["--env-kwarg", "returns=0"], "--env-kwarg returns=0 does not fit "
+             "lili/InfluenceSwitch-v0 (every env of the plan must take it; choose them with "
+             "--envs): unknown env kwarg(s) 'returns'"),
+            (["--envs", "influence-drift", "--env-kwarg", "returns=2"],
+             "does not fit lili/InfluenceDrift-v0 (every env of the plan must take it; choose "
+             "them with --envs): returns=2 is invalid; allowed: a number in [0, 1]"),
+            (["--env-kwarg", "returns"], "--env-kwarg 'returns' is invalid; allowed: KEY=VALUE")]:
+        assert main(["reproduce", "influence", *argv, "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and message in err[0], err
+    assert not out.exists()
+
+
+def test_env_kwarg_reaches_the_run(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    assert main(["reproduce", "influence", "--envs", "influence-drift", "--algos", "sac",
+                 "--quick", "--env-kwarg", "returns=0", "--out", str(out),
+                 "--no-progress"]) == 0
+    (config,) = out.rglob("config.yaml")
+    assert yaml.safe_load(config.read_text())["env_kwargs"] == {"returns": 0}
+
+
 def test_each_algo_checks_its_own_constraints_before_anything_runs(tmp_path: Path,
                                                                     capsys) -> None:
     # --quick once set a warm-up LILAC refuses; its runs failed one by one after the sweep began.

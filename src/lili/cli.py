@@ -239,7 +239,8 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
               algos=tuple(args.algos) if args.algos else None,
               envs=tuple(args.envs) if args.envs else None,
               progress=False if args.no_progress else None,
-              overrides=parse_overrides(args.set))
+              overrides=parse_overrides(args.set),
+              env_kwargs=_parse_kwargs(args.env_kwarg))
     return 0
 
 
@@ -316,6 +317,10 @@ def build_parser() -> argparse.ArgumentParser:
     x.add_argument("--set", action="append", default=[], metavar="FIELD=VALUE",
                    help="agent-config field for every run, e.g. gamma=0.999 (repeatable; an "
                         "ablation: give it its own --out)")
+    x.add_argument("--env-kwarg", action="append", default=[], metavar="KEY=VALUE",
+                   help="env option for every run, e.g. aim_noise=0.02 (repeatable; every env "
+                        "of the plan must take it: choose them with --envs; give it its own "
+                        "--out)")
     x.add_argument("--dry-run", action="store_true", help="list the runs and the CPU-hours")
     x.add_argument("--report-only", action="store_true",
                    help="start nothing; write an interim report from the finished runs")

@@ -63,7 +63,7 @@ class RunSpec:
 
 def _expand_one(preset: Preset, out: Path, seeds: int, interactions: int | None,
                 algos: tuple[str, ...] | None, envs: tuple[str, ...] | None,
-                extra_config: dict[str, Any]) -> list[RunSpec]:
+                extra_config: dict[str, Any], extra_env: dict[str, Any]) -> list[RunSpec]:
     budget = interactions if interactions is not None else preset.interactions
     specs = []
     for seed in range(seeds):
@@ -76,7 +76,7 @@ def _expand_one(preset: Preset, out: Path, seeds: int, interactions: int | None,
                 specs.append(RunSpec(preset=preset.name, folder=group.folder,
                                      experiment=out / group.folder,
                                      env=group.env, algo=algo, seed=seed, interactions=budget,
-                                     env_kwargs=dict(group.env_kwargs),
+                                     env_kwargs={**group.env_kwargs, **extra_env},
                                      config={**group.config, **extra_config}))
     return specs
 
@@ -84,15 +84,18 @@ def _expand_one(preset: Preset, out: Path, seeds: int, interactions: int | None,
 def plan(preset: Preset, out: str | Path, seeds: int | None = None,
          interactions: int | None = None, algos: tuple[str, ...] | None = None,
          quick: bool = False, overrides: dict[str, Any] | None = None,
-         envs: tuple[str, ...] | None = None) -> list[RunSpec]:
+         envs: tuple[str, ...] | None = None,
+         env_kwargs: dict[str, Any] | None = None) -> list[RunSpec]:
     """Every run of ``preset`` under ``out``, each once (presets share runs; see presets).
 
     ``quick``: :data:`QUICK_INTERACTIONS` interactions, 1 seed and :data:`QUICK_CONFIG`, unless
     ``seeds`` / ``interactions`` are given. ``algos`` keeps only those algos, ``envs`` only
     those envs (registered ids or aliases, e.g. ``influence-drift``). ``overrides``:
     agent-config fields set in every run, over the preset's own (``lili reproduce --set``; an
-    ablation, so give it its own ``--out``). Raises ValueError for a bad value, or when an
-    existing run folder holds another config.
+    ablation, so give it its own ``--out``). ``env_kwargs``: env options set in every run,
+    over the preset's own (``lili reproduce --env-kwarg``, e.g. the old air hockey game with
+    ``aim_noise=0.02``); every env of the plan must take them (narrow it with ``envs``).
+    Raises ValueError for a bad value, or when an existing run folder holds another config.
     """
     if seeds is not None and (isinstance(seeds, bool) or seeds < 1):
         raise ValueError(f"--seeds {seeds} is invalid; allowed: an integer >= 1")
@@ -120,7 +123,8 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
     for part in parts:
         n_seeds = seeds if seeds is not None else part.seeds
         for spec in _expand_one(part, out, n_seeds, interactions, algos, env_ids,
-                                {**(QUICK_CONFIG if quick else {}), **(overrides or {})}):
+                                {**(QUICK_CONFIG if quick else {}), **(overrides or {})},
+                                env_kwargs or {}):
             known = specs.get(spec.run_dir)
             if known is None:
                 specs[spec.run_dir] = spec
@@ -129,6 +133,8 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
                 raise ValueError(f"presets {known.preset!r} and {spec.preset!r} define the run "
                                  f"{spec.run_dir} differently")
     result = list(specs.values())
+    if env_kwargs:
+        _check_env_kwargs(result, env_kwargs)
     from lili.agents import check_config  # here: it imports JAX, which --dry-run need not
 
     for spec in result:
@@ -136,6 +142,23 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
         check_config(spec.algo, AgentConfig.from_dict(spec.config))
         run_status(spec)
     return result
+
+
+def _check_env_kwargs(specs: list[RunSpec], given: dict[str, Any]) -> None:
+    """ValueError naming the env and the bad ``--env-kwarg`` unless every env of the plan takes
+    the given options: checked by name, then by building the env once with the kwargs its
+    runs will get, so that a bad value fails here and not in every run."""
+    from lili.envs.checker import check_env_kwargs, load_env_class
+
+    for env_id, kwargs in {s.env: s.env_kwargs for s in specs}.items():
+        factory = load_env_class(env_id)
+        try:
+            check_env_kwargs(factory, given, env_id)
+            factory(**kwargs).close()
+        except (TypeError, ValueError) as e:
+            items = " ".join(f"{k}={v}" for k, v in given.items())
+            raise ValueError(f"--env-kwarg {items} does not fit {env_id} (every env of the "
+                             f"plan must take it; choose them with --envs): {e}") from None
 
 
 def run_status(spec: RunSpec) -> str:

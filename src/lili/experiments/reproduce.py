@@ -69,17 +69,18 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
               ray: str | None = None, quick: bool = False, dry_run: bool = False,
               algos: tuple[str, ...] | None = None, progress: bool | None = None,
               overrides: dict[str, Any] | None = None, envs: tuple[str, ...] | None = None,
-              report_only: bool = False,
+              report_only: bool = False, env_kwargs: dict[str, Any] | None = None,
               say: Callable[[str], None] = print) -> dict[str, Any]:
     """Run preset ``name`` into ``out`` and write ``out/<name>/report/``; see the module doc.
 
     ``ray``: None (local processes), ``"local"`` (start Ray on this machine) or a cluster
-    address. ``overrides``: agent-config fields set in every run, ``algos`` / ``envs``: only
-    those of the preset (:func:`plan`). ``report_only``: start nothing and write an interim
-    report from the runs that are finished (a long sweep's table so far). Every value
-    is checked and every existing run folder compared with the run it
-    would become before anything is written; a bad one raises ValueError naming it. Runs that
-    fail are listed (with their logs) in a ValueError after the others have finished.
+    address. ``overrides``: agent-config fields set in every run, ``env_kwargs``: env options
+    set in every run, ``algos`` / ``envs``: only those of the preset (:func:`plan`).
+    ``report_only``: start nothing and write an interim report from the runs that are
+    finished (a long sweep's table so far). Every value is checked and every existing run
+    folder compared with the run it would become before anything is written; a bad one
+    raises ValueError naming it. Runs that fail are listed (with their logs) in a ValueError
+    after the others have finished.
     """
     preset = get_preset(name)
     if jobs is not None and (isinstance(jobs, bool) or jobs < 1):
@@ -87,7 +88,7 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     out = Path(out)
     check_out_dir(out)
     specs = plan(preset, out, seeds=seeds, interactions=interactions, algos=algos, quick=quick,
-                 overrides=overrides, envs=envs)
+                 overrides=overrides, envs=envs, env_kwargs=env_kwargs)
     status = {s: run_status(s) for s in specs}
     if dry_run and report_only:
         raise ValueError("--dry-run and --report-only are invalid together; allowed: one of them")
