@@ -94,14 +94,30 @@ def _git_commit() -> str | None:
         return None
 
 
+def _cpu_model() -> str:
+    """The CPU's model name where Linux gives it, else the architecture."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.partition(":")[2].strip()
+    except OSError:
+        pass
+    return platform.machine()
+
+
 def _versions() -> dict[str, str]:
+    """What the numbers of a run depend on besides its config and seed. XLA compiles for the
+    CPU it runs on and optax does the updates, so both are here: a Drift run's sixth digit
+    once moved between two checkouts with the same code and the same jax/flax/numpy."""
     import flax
     import gymnasium
     import jax
+    import jaxlib
+    import optax
 
     return {"lili": lili.__version__, "python": platform.python_version(), "jax": jax.__version__,
-            "flax": flax.__version__, "gymnasium": gymnasium.__version__,
-            "numpy": np.__version__}
+            "jaxlib": jaxlib.__version__, "flax": flax.__version__, "optax": optax.__version__,
+            "gymnasium": gymnasium.__version__, "numpy": np.__version__, "cpu": _cpu_model()}
 
 
 def read_run_config(run_dir: str | Path) -> dict[str, Any]:
