@@ -72,6 +72,7 @@ def _score(runs: list, env_id: str) -> dict:
                           HELD[env_id]).mean()) for r in runs]
     mean, se = mean_se(finals)
     return {"mean": mean, "se": se, "per_seed": finals, "held": float(np.mean(held)),
+            "held_per_seed": held,
             "seeds": [r.seed for r in runs],
             "interactions": min(r.n_interactions for r in runs)}
 
@@ -117,8 +118,17 @@ def table(env_id: str, scripted: dict, learned: dict) -> list[str]:
             versus = f"{diff:+.3f} ({diff / se:+.1f} s.e.)" if se > 0 else f"{diff:+.3f}"
         lines.append(f"| {algo_label(algo)} ({len(row['per_seed'])} seeds, "
                      f"{row['interactions']} int.) | {row['mean']:.3f} ± {row['se']:.3f} | "
-                     f"| {gap} | {100 * row['held']:.0f}% | {versus} |")
+                     f"| {gap} | {_held(row)} | {versus} |")
     return lines + [""]
+
+
+def _held(row: dict) -> str:
+    """The held share, with each seed's where the row has them (not rows of older reports)."""
+    text = f"{100 * row['held']:.0f}%"
+    seeds = row.get("held_per_seed")
+    if seeds and len(seeds) > 1:
+        text += " (" + " / ".join(f"{100 * h:.0f}" for h in seeds) + ")"
+    return text
 
 
 def merged(path: Path, learned: dict) -> dict:

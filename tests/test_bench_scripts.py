@@ -35,6 +35,17 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
         merged(path, {})
 
 
+def test_influence_table_gives_the_held_share_per_seed() -> None:
+    table = _script("influence").table
+    scripted = {name: {"mean": m, "known": None} for name, m in
+                [("no-information", -0.66), ("greedy", -0.32), ("influencer", -0.18)]}
+    row = {"mean": -0.66, "se": 0.03, "per_seed": [-0.67, -0.70, -0.60], "interactions": 2000}
+    old = table("e", scripted, {"lili": {**row, "held": 0.07}})
+    new = table("e", scripted, {"lili": {**row, "held": 0.07,
+                                         "held_per_seed": [0.08, 0.095, 0.035]}})
+    assert "| 7% |" in old[-2] and "| 7% (8 / 10 / 4) |" in new[-2]
+
+
 @pytest.mark.parametrize(("script", "args"), [
     ("play_bot", ["a=scripted:greedy"]), ("latent_probe", ["run"]), ("influence", []),
     ("success_by_strategy", ["run"]), ("drift_lagged", [])])
