@@ -113,6 +113,9 @@ def test_env_kwarg_reaches_the_run(tmp_path: Path) -> None:
                  "--no-progress"]) == 0
     (config,) = out.rglob("config.yaml")
     assert yaml.safe_load(config.read_text())["env_kwargs"] == {"returns": 0}
+    # The report does not pass for the preset's own beside the paper.
+    md = (out / "influence" / "report" / "results.md").read_text()
+    assert "**Every run changed from the preset's:** `--env-kwarg returns=0`." in md
 
 
 def test_each_algo_checks_its_own_constraints_before_anything_runs(tmp_path: Path,
@@ -324,6 +327,7 @@ def test_quick_sweep_writes_runs_and_report(quick_sweep: Path) -> None:
     report = quick_sweep / "point-mass" / "report"
     md = (report / "results.md").read_text()
     assert "`lili reproduce point-mass`" in md and "Fig. 4" in md
+    assert "changed from the preset" not in md
     assert "| SAC | 1 |" in md and "-5.05" in md and "| LILI | 1 |" in md
     assert (report / "curves.png").is_file() and (report / "heatmap.png").is_file()
     assert (report / "results.json").is_file()

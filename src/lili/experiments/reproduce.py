@@ -94,8 +94,9 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
         raise ValueError("--dry-run and --report-only are invalid together; allowed: one of them")
     if dry_run:
         return _dry_run(name, specs, status, jobs or LOCAL_JOBS, say)
+    changes = _changes(overrides, env_kwargs)
     if report_only:
-        return _report_only(name, preset, specs, status, out, say)
+        return _report_only(name, preset, specs, status, out, say, changes)
     if ray is not None:
         _check_ray_importable()
     todo = [s for s in specs if status[s] != "done"]
@@ -111,30 +112,38 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
             raise ValueError(f"{len(failed)} of {len(todo)} runs failed:\n{lines}")
     else:
         say(f"{name}: all {len(specs)} runs are done")
-    report = _write_report(preset, specs, out, say)
+    report = _write_report(preset, specs, out, say, changes=changes)
     say(f"report: {report['dir']} ({time.time() - t0:.0f} s)")
     return {"runs": len(specs), "ran": len(todo), "report": report}
 
 
+def _changes(overrides: dict[str, Any] | None, env_kwargs: dict[str, Any] | None) -> str:
+    """The flags that made every run differ from the preset's, as a report names them."""
+    parts = [f"{flag} {key}={value}" for flag, given in (("--set", overrides),
+                                                         ("--env-kwarg", env_kwargs))
+             for key, value in (given or {}).items()]
+    return " ".join(f"`{p}`" for p in parts)
+
+
 def _write_report(preset, specs: list[RunSpec], out: Path, say: Callable[[str], None],
-                  planned: list[RunSpec] | None = None) -> dict[str, Any]:
+                  planned: list[RunSpec] | None = None, changes: str = "") -> dict[str, Any]:
     """Write the preset's report from ``specs`` and print its markdown."""
     from lili.experiments.results import write_preset_report
 
-    report = write_preset_report(preset, specs, out, planned=planned)
+    report = write_preset_report(preset, specs, out, planned=planned, changes=changes)
     say(report["markdown"])
     return report
 
 
 def _report_only(name: str, preset, specs: list[RunSpec], status: dict[RunSpec, str],
-                 out: Path, say: Callable[[str], None]) -> dict[str, Any]:
+                 out: Path, say: Callable[[str], None], changes: str) -> dict[str, Any]:
     done = [s for s in specs if status[s] == "done"]
     if not done:
         raise ValueError(f"--report-only: no run of preset {name!r} is finished under {out}; "
                          f"allowed: an --out that holds finished runs of it")
     say(f"{name}: interim report from {len(done)} of {len(specs)} runs (the rest are not "
         f"finished; nothing is started)")
-    report = _write_report(preset, done, out, say, planned=specs)
+    report = _write_report(preset, done, out, say, planned=specs, changes=changes)
     say(f"report: {report['dir']}")
     return {"runs": len(specs), "ran": 0, "report": report}
 
