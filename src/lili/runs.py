@@ -78,6 +78,13 @@ def final_mean(values: list[float] | np.ndarray, frac: float = 0.1) -> float:
     return float(np.mean(np.asarray(values, float)[-final_window(len(values), frac):]))
 
 
+def _final(values: list[float] | np.ndarray) -> float | None:
+    """:func:`final_mean` over the values that are not NaN; None when there are none."""
+    values = np.asarray(values, float)
+    values = values[~np.isnan(values)]
+    return final_mean(values) if values.size else None
+
+
 def metric_columns(strategy_dim: int) -> list[str]:
     """The header of ``metrics.csv`` for an env whose strategy has ``strategy_dim`` entries."""
     return (["interaction", "return", "length", "success"]
@@ -264,9 +271,8 @@ class RunLogger:
         self.tb = SummaryWriter(str(self.dir / "tb"), purge_step=start if start > 0 else None)
         self.returns = [float(r[1]) for r in rows]
         success = self.columns.index("success")
-        self.successes = [float(r[success]) for r in rows if r[success] != ""]
-        # The interaction of each success, to leave out the ones played at random in finish().
-        self._success_at = [int(r[0]) for r in rows if r[success] != ""]
+        # One cell per interaction (NaN where the env reports none), aligned with the returns.
+        self.successes = [float(r[success]) if r[success] != "" else math.nan for r in rows]
 
     def log(self, row: dict[str, Any], agent: SAC, stream: Stream) -> None:
         """Append one interaction's row; checkpoint every ``checkpoint_every`` interactions."""
@@ -284,9 +290,8 @@ class RunLogger:
         self._csv_file.flush()
         self.returns.append(row["return"])
         self.tb.add_scalar("interaction/return", row["return"], i)
+        self.successes.append(math.nan if success is None else float(success))
         if success is not None:
-            self.successes.append(float(success))
-            self._success_at.append(i)
             self.tb.add_scalar("interaction/success", float(success), i)
         for k in METRIC_COLUMNS:
             if k in row:
@@ -328,8 +333,8 @@ class RunLogger:
             "algo": config["algo"],
             "seed": config["seed"],
             "interactions": stream.count,
-            "final_return": final_mean(self.returns) if self.returns else None,
-            "final_success": final_mean(self.successes) if self.successes else None,
+            "final_return": _final(self.returns),
+            "final_success": _final(self.successes),
             **self._policy_only(agent),
             "wall_time_s": round(stream.wall_time, 2),
             "cpu_time_s": (round(stream.cpu_time, 2) if np.isfinite(stream.cpu_time)
@@ -346,13 +351,10 @@ class RunLogger:
         cfg = agent.config
         if cfg.random_interactions <= 0:
             return {}
-        drawn = drawn_at_random(agent.seed, len(self.returns), cfg.warmup_interactions,
-                                cfg.random_interactions)
-        returns = [r for r, d in zip(self.returns, drawn, strict=True) if not d]
-        successes = [s for s, i in zip(self.successes, self._success_at, strict=True)
-                     if not drawn[i]]
-        return {"final_return_policy": final_mean(returns) if returns else None,
-                "final_success_policy": final_mean(successes) if successes else None}
+        own = ~drawn_at_random(agent.seed, len(self.returns), cfg.warmup_interactions,
+                               cfg.random_interactions)
+        return {"final_return_policy": _final(np.asarray(self.returns)[own]),
+                "final_success_policy": _final(np.asarray(self.successes)[own])}
 
     def close(self) -> None:
         self.tb.close()
