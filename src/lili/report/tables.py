@@ -9,7 +9,7 @@ from lili.report.paper import paper_reference
 from lili.report.stats import STRATEGY_WINDOW, strategy_names
 from lili.report.style import algo_label, env_title
 
-__all__ = ["markdown_table", "fmt_mean_se", "fmt_duration"]
+__all__ = ["markdown_table", "fmt_mean_se", "fmt_duration", "fmt_interval"]
 
 
 def fmt_mean_se(value: float | None, se: float | None, spec: str = ".2f", pct: bool = False,
@@ -28,6 +28,24 @@ def fmt_mean_se(value: float | None, se: float | None, spec: str = ".2f", pct: b
         text = f"{value:{spec}}"
         spread = f" ± {(se or 0.0):{spec}}"
     return text if se is None or n == 1 else text + spread
+
+
+def fmt_interval(value: float | None, low: float | None = None, high: float | None = None,
+                 spec: str = ".2f", pct: bool = False) -> str:
+    """``1.16 [1.07, 1.26]`` (a point and its interval; a percentage with ``pct``), the point
+    alone without bounds (one seed), ``—`` without a value."""
+    if value is None:
+        return "—"
+    scale, unit, spec = (100.0, "%", ".1f") if pct else (1.0, "", spec)
+    text = f"{scale * value:{spec}}{unit}"
+    if low is None or high is None:
+        return text
+    return f"{text} [{scale * low:{spec}}, {scale * high:{spec}}]"
+
+
+def _fmt_iqm(row: dict[str, Any], metric: str, pct: bool = False) -> str:
+    ci = row.get(f"{metric}_iqm_ci") or (None, None)
+    return fmt_interval(row.get(f"{metric}_iqm"), *ci, pct=pct)
 
 
 def fmt_duration(seconds: float | None) -> str:
@@ -58,8 +76,9 @@ def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
             f"### {env_title(env)}",
             "",
             "| algo | seeds | final return (mean ± s.e.) | success (mean ± s.e.) "
-            "| gap closed | paper | wall time / run |",
-            "|---|---:|---:|---:|---:|---|---:|",
+            "| gap closed | paper | wall time / run | return IQM [95% CI] "
+            "| success IQM [95% CI] |",
+            "|---|---:|---:|---:|---:|---|---:|---:|---:|",
         ]
         for row in rows:
             gap = "—" if row["gap_closed"] is None else f"{row['gap_closed']:.2f}"
@@ -81,7 +100,8 @@ def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
                 f"| {algo_label(row['algo'])} | {seeds} "
                 f"| {fmt_mean_se(row['return_mean'], row['return_se'], n=row['n'])} "
                 f"| {fmt_mean_se(row['success_mean'], row['success_se'], pct=True, n=row['n'])} "
-                f"| {gap} | {paper} | {fmt_duration(row.get('wall_time_mean'))} |"
+                f"| {gap} | {paper} | {fmt_duration(row.get('wall_time_mean'))} "
+                f"| {_fmt_iqm(row, 'return')} | {_fmt_iqm(row, 'success', pct=True)} |"
             )
         ref = paper_reference(env) or {}
         notes = []
@@ -113,7 +133,9 @@ def markdown_table(summary: Sequence[dict[str, Any]] | dict[str, Any]) -> str:
             window += " the policy played (those played at random left out)"
         notes.append(
             f"Final = mean over the last 10% of {window} per seed; s.e. over seeds; "
-            "gap closed = (R − R_SAC) / (R_Oracle − R_SAC)."
+            "gap closed = (R − R_SAC) / (R_Oracle − R_SAC); IQM = interquartile mean over "
+            "seeds (the mean with 3 seeds), with a percentile bootstrap 95% confidence "
+            "interval over seeds."
         )
         lines += ["", *notes]
         parts.append("\n".join(lines))

@@ -15,9 +15,9 @@ import numpy as np
 
 from lili.report.files import Run
 from lili.report.paper import PAPER_TABLES
-from lili.report.stats import final_performance, mean_se
+from lili.report.stats import final_performance, iqm_ci, mean_se
 from lili.report.style import DPI, algo_color, algo_label
-from lili.report.tables import fmt_mean_se
+from lili.report.tables import fmt_interval, fmt_mean_se
 
 __all__ = ["variant_rows", "variant_markdown", "plot_variants"]
 
@@ -29,7 +29,10 @@ def variant_rows(variants: Sequence[Variant], bounds: Sequence[Run], table: str,
     """One dict per variant (``label``, ``value``, runs) and per bound algo (SAC, Oracle).
 
     Keys: ``label``, ``value`` (None for a bound), ``algo``, ``n``, ``seeds``, ``returns``,
-    ``return_mean``, ``return_se``, ``interactions`` (fewest logged), ``paper_mean`` and
+    ``return_mean``, ``return_se``, ``return_iqm`` and ``return_iqm_ci`` (the IQM over seeds
+    and its bootstrap 95% interval ``[low, high]``, :func:`~lili.report.stats.iqm_ci`; None
+    without runs, the interval None with one seed), ``interactions`` (fewest logged),
+    ``paper_mean`` and
     ``paper_se`` (None where the paper has no such row). Raises ValueError for an unknown
     ``table``.
     """
@@ -42,9 +45,11 @@ def variant_rows(variants: Sequence[Variant], bounds: Sequence[Run], table: str,
         runs = [r for r in runs if r.n_interactions]
         returns = [final_performance(r, "return", frac) for r in runs]
         mean, se = mean_se(returns)
+        point, low, high = iqm_ci(returns) if returns else (None, None, None)
         return {"label": label, "value": value, "algo": algo, "n": len(runs),
                 "seeds": sorted(r.seed for r in runs), "returns": returns,
-                "return_mean": mean, "return_se": se,
+                "return_mean": mean, "return_se": se, "return_iqm": point,
+                "return_iqm_ci": None if low is None else [low, high],
                 "interactions": min((r.n_interactions for r in runs), default=0),
                 "paper_mean": None if paper is None else paper[0],
                 "paper_se": None if paper is None else paper[1]}
@@ -63,20 +68,23 @@ def variant_markdown(rows: Sequence[dict[str, Any]], table: str, bounds_from: st
     ref = PAPER_TABLES[table]
     lines = [f"### {ref['title']}", "",
              f"| {ref['parameter_label']} | algo | seeds | final return (mean ± s.e.) "
-             "| paper (mean ± s.e.) |",
-             "|---|---|---:|---:|---:|"]
+             "| paper (mean ± s.e.) | IQM [95% CI] |",
+             "|---|---|---:|---:|---:|---:|"]
     for r in rows:
         value = "—" if r["value"] is None else f"{r['value']:g}"
         lines.append(f"| {value} | {algo_label(r['algo'])} | {r['n']} "
                      f"| {fmt_mean_se(r['return_mean'], r['return_se'], n=r['n'])} "
-                     f"| {fmt_mean_se(r['paper_mean'], r['paper_se'], '.4g')} |")
+                     f"| {fmt_mean_se(r['paper_mean'], r['paper_se'], '.4g')} "
+                     f"| {fmt_interval(r['return_iqm'], *(r['return_iqm_ci'] or (None, None)))} |")
     lines += ["", f"Paper: {ref['source']}. Bounds: {ref['bounds_note']}; ours are {bounds_from}.",
-              "Final = mean over the last 10% of interactions per seed; s.e. over seeds."]
+              "Final = mean over the last 10% of interactions per seed; s.e. over seeds; IQM = "
+              "interquartile mean over seeds with a percentile bootstrap 95% interval."]
     return "\n".join(lines) + "\n"
 
 
 def plot_variants(rows: Sequence[dict[str, Any]], table: str, out_png: str | Path) -> Path:
-    """Final return against the partner parameter: ours and the paper's, with s.e. bars."""
+    """Final return against the partner parameter: ours and the paper's, with s.e. bars, and
+    the bootstrap 95% interval of our IQM as a band."""
     import matplotlib
 
     matplotlib.use("Agg", force=True)
@@ -87,7 +95,12 @@ def plot_variants(rows: Sequence[dict[str, Any]], table: str, out_png: str | Pat
     fig, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
     xs = np.array([r["value"] for r in var], dtype=float)
     ax.errorbar(xs, [r["return_mean"] for r in var], [r["return_se"] for r in var],
-                color=algo_color("lili"), marker="o", capsize=3, label="LILI (ours)")
+                color=algo_color("lili"), marker="o", capsize=3, label="LILI (ours, mean ± s.e.)")
+    banded = [r for r in var if r.get("return_iqm_ci")]
+    if banded:
+        ax.fill_between([r["value"] for r in banded], [r["return_iqm_ci"][0] for r in banded],
+                        [r["return_iqm_ci"][1] for r in banded], color=algo_color("lili"),
+                        alpha=0.15, lw=0, label="LILI (ours, IQM 95% CI)")
     paper = sorted(ref["rows"].items())
     ax.errorbar([k for k, _ in paper], [v[0] for _, v in paper], [v[1] for _, v in paper],
                 color=algo_color("lili"), marker="s", ls="--", alpha=0.6, capsize=3,
