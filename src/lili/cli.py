@@ -240,7 +240,16 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
               envs=tuple(args.envs) if args.envs else None,
               progress=False if args.no_progress else None,
               overrides=parse_overrides(args.set),
-              env_kwargs=_parse_kwargs(args.env_kwarg))
+              env_kwargs=_parse_kwargs(args.env_kwarg),
+              check_only=args.check_only, sources=args.sources)
+    return 0
+
+
+def cmd_results(args: argparse.Namespace) -> int:
+    from lili.experiments.page import write_results_page
+
+    path = write_results_page(args.sources, args.out)
+    print(f"results page: {path}")
     return 0
 
 
@@ -325,7 +334,23 @@ def build_parser() -> argparse.ArgumentParser:
     x.add_argument("--report-only", action="store_true",
                    help="start nothing; write an interim report from the finished runs")
     x.add_argument("--no-progress", action="store_true", help="plain lines, no bars")
+    x.add_argument("--check-only", action="store_true",
+                   help="train nothing: check the preset's claims against the finished runs "
+                        "under --out (or --sources)")
+    x.add_argument("--sources", metavar="FILE",
+                   help="with --check-only: the run folders of each group, e.g. "
+                        "benchmarks/results/claims_sources.yaml (the committed records)")
     x.set_defaults(func=cmd_reproduce)
+
+    from lili.experiments.page import DEFAULT_OUT, DEFAULT_SOURCES
+
+    res = sub.add_parser("results", help="write the results page (docs/results.md) from the "
+                         "committed records")
+    res.add_argument("--sources", default=DEFAULT_SOURCES,
+                     help=f"run folders per preset group (default {DEFAULT_SOURCES})")
+    res.add_argument("--out", default=DEFAULT_OUT, help=f"the page (default {DEFAULT_OUT}; "
+                     "figures in results/ beside it)")
+    res.set_defaults(func=cmd_results)
 
     c = sub.add_parser("check-env", help="check an env against the repeated-interaction contract")
     c.add_argument("env", help="MODULE:CLASS, or a registered id")

@@ -31,7 +31,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import yaml
@@ -48,7 +48,7 @@ from lili.report.stats import (
 from lili.report.style import env_key
 from lili.report.tables import fmt_interval
 
-__all__ = ["Side", "Claim", "ClaimResult", "CLAIMS", "claims_for", "check_claims",
+__all__ = ["Source", "Side", "Claim", "ClaimResult", "CLAIMS", "claims_for", "check_claims",
            "claims_markdown", "out_layout", "load_sources", "load_evidence", "Evidence",
            "VERDICTS", "metric_values"]
 
@@ -56,7 +56,18 @@ VERDICTS = ("PASS", "FAIL", "too few seeds")
 RULES = ("greater", "level", "at_least", "at_most", "near")
 Evidence = dict[tuple[str, str], list[Run]]
 """(group folder, algo) -> its finished runs, sorted by seed."""
-Locate = Callable[[Group], list[tuple[Path, tuple[str, ...] | None]]]
+
+
+class Source(NamedTuple):
+    """A folder of runs that is (part of) a group's evidence: only ``algos`` of it (None: all),
+    and why it was chosen."""
+
+    path: Path
+    algos: tuple[str, ...] | None = None
+    note: str = ""
+
+
+Locate = Callable[[Group], list[Source]]
 
 
 @dataclass(frozen=True)
@@ -130,7 +141,8 @@ _LEFT = 0  # strategy_id of the striker's left shot (PAPER's strategy_names)
 
 
 def _num(value: float) -> str:
-    return f"{value:.4g}"
+    """The paper's number as printed there (``-0.8563``, ``1.00``)."""
+    return f"{value:.2f}" if round(value, 2) == value else f"{value:.4g}"
 
 
 def _pct(value: float) -> str:
@@ -317,9 +329,9 @@ def out_layout(out: str | Path) -> Locate:
     """Runs in the preset layout under ``out`` (what ``lili reproduce --out`` writes)."""
     out = Path(out)
 
-    def locate(group: Group) -> list[tuple[Path, tuple[str, ...] | None]]:
+    def locate(group: Group) -> list[Source]:
         folder = out / group.folder
-        return [(folder, None)] if folder.is_dir() else []
+        return [Source(folder)] if folder.is_dir() else []
 
     return locate
 
@@ -352,7 +364,7 @@ def load_sources(path: str | Path) -> Locate:
         raise ValueError(f"--sources {path}: expected a mapping of group folders to lists of "
                          "{path, algos, note}")
     known = _known_folders()
-    table: dict[str, list[tuple[Path, tuple[str, ...] | None]]] = {}
+    table: dict[str, list[Source]] = {}
     for folder, entries in data.items():
         if folder not in known:
             raise ValueError(f"--sources {path}: unknown group folder {folder!r}; allowed: "
@@ -374,9 +386,9 @@ def load_sources(path: str | Path) -> Locate:
                     raise ValueError(f"--sources {path}: {folder}: algos {bad} are not run in "
                                      f"that folder; allowed: {', '.join(known[folder])}")
                 algos = tuple(algos)
-            table.setdefault(folder, []).append((where, algos))
+            table.setdefault(folder, []).append(Source(where, algos, str(entry.get("note", ""))))
 
-    def locate(group: Group) -> list[tuple[Path, tuple[str, ...] | None]]:
+    def locate(group: Group) -> list[Source]:
         return table.get(group.folder, [])
 
     return locate
@@ -392,7 +404,7 @@ def load_evidence(preset: Preset, locate: Locate) -> Evidence:
     seen: dict[tuple[str, str, int], Path] = {}
     loaded: dict[Path, list[Run]] = {}
     for group in (g for part in parts for g in part.groups):
-        for where, only in locate(group):
+        for where, only, _note in locate(group):
             if where not in loaded:
                 loaded[where] = [r for r in find_runs([where])
                                  if (r.path / SUMMARY_FILE).is_file()]
@@ -456,16 +468,18 @@ def check_claim(part: Preset, claim: Claim, evidence: Evidence) -> ClaimResult:
     values = [metric_values(evidence.get((_side_folder(part, s), s.algo), []), claim.metric)
               for s in sides]
     seeds = tuple(len(v) for v in values)
-    if min(seeds) < claim.min_seeds:
+    few = min(seeds) < claim.min_seeds
+    if min(seeds) == 0:
         have = " vs ".join(str(n) for n in seeds)
         return ClaimResult(claim, "too few seeds",
                            f"{have} seeds (needs {claim.min_seeds} each)", seeds)
+    need = f"; needs {claim.min_seeds}" if few else ""
     stats: dict[str, Any] = {"a": iqm_ci(values[0])}
     point = stats["a"][0]
     if claim.b is None:
         ok = {"at_least": point >= claim.target, "at_most": point <= claim.target,
               "near": abs(point - claim.target) <= (claim.tolerance or 0.0)}[claim.rule]
-        ours = f"{_fmt(stats['a'], claim.pct)} ({seeds[0]} seeds)"
+        ours = f"{_fmt(stats['a'], claim.pct)} ({seeds[0]} seeds{need})"
     else:
         stats["b"] = iqm_ci(values[1])
         stats["p"] = probability_of_improvement_ci(values[0], values[1])
@@ -477,7 +491,9 @@ def check_claim(part: Preset, claim: Claim, evidence: Evidence) -> ClaimResult:
         else:
             ok = low <= 0.5 <= high
         ours = (f"{_fmt(stats['a'], claim.pct)} vs {_fmt(stats['b'], claim.pct)}; "
-                f"P(>) {fmt_interval(*stats['p'])} ({seeds[0]} vs {seeds[1]} seeds)")
+                f"P(>) {fmt_interval(*stats['p'])} ({seeds[0]} vs {seeds[1]} seeds{need})")
+    if few:
+        return ClaimResult(claim, "too few seeds", ours, seeds, stats)
     return ClaimResult(claim, "PASS" if ok else "FAIL", ours, seeds, stats)
 
 
@@ -494,9 +510,9 @@ RULE_NOTE = ("A > B: PASS when A's IQM is above B's and the 95% interval of P(A 
 
 
 def claims_markdown(results: Sequence[tuple[Preset, ClaimResult]],
-                    with_part: bool = True) -> str:
-    """The table claim | ours | paper | verdict (a FAIL in bold, never left out), and the
-    decision rules below it."""
+                    with_part: bool = True, rules: bool = True) -> str:
+    """The table (preset |) claim | ours | paper | verdict (a FAIL in bold, never left out),
+    the count of each verdict below it and (``rules``) the decision rules."""
     lines = ["| " + ("preset | " if with_part else "") + "claim | ours | paper | verdict |",
              "|" + ("---|" if with_part else "") + "---|---|---|---|"]
     for part, r in results:
@@ -505,6 +521,6 @@ def claims_markdown(results: Sequence[tuple[Preset, ClaimResult]],
                      + f"{r.claim.statement} | {r.ours} | {r.paper} | {verdict} |")
     counts = {v: sum(r.verdict == v for _, r in results) for v in VERDICTS}
     lines += ["", f"{counts['PASS']} PASS, {counts['FAIL']} FAIL, {counts['too few seeds']} "
-              f"too few seeds, of {len(results)} claims. {RULE_NOTE}"]
+              f"too few seeds, of {len(results)} claims." + (f" {RULE_NOTE}" if rules else "")]
     return "\n".join(lines) + "\n"
 

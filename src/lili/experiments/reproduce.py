@@ -70,6 +70,7 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
               algos: tuple[str, ...] | None = None, progress: bool | None = None,
               overrides: dict[str, Any] | None = None, envs: tuple[str, ...] | None = None,
               report_only: bool = False, env_kwargs: dict[str, Any] | None = None,
+              check_only: bool = False, sources: str | Path | None = None,
               say: Callable[[str], None] = print) -> dict[str, Any]:
     """Run preset ``name`` into ``out`` and write ``out/<name>/report/``; see the module doc.
 
@@ -77,12 +78,24 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     address. ``overrides``: agent-config fields set in every run, ``env_kwargs``: env options
     set in every run, ``algos`` / ``envs``: only those of the preset (:func:`plan`).
     ``report_only``: start nothing and write an interim report from the runs that are
-    finished (a long sweep's table so far). Every value is checked and every existing run
-    folder compared with the run it would become before anything is written; a bad one
+    finished (a long sweep's table so far). ``check_only``: start and write nothing; check the
+    preset's claims (:mod:`lili.experiments.claims`) against the finished runs under ``out``
+    (the preset layout) or, with ``sources``, the run folders a sources file names
+    (``benchmarks/results/claims_sources.yaml``). Every other report ends with the same claims
+    table, also written to ``out/<name>/report/claims.md``. Every value is checked and every
+    existing run folder compared with the run it would become before anything is written; a bad one
     raises ValueError naming it. Runs that fail are listed (with their logs) in a ValueError
     after the others have finished.
     """
     preset = get_preset(name)
+    if check_only:
+        if dry_run or report_only:
+            raise ValueError("--check-only is invalid with --dry-run or --report-only; "
+                             "allowed: one of them")
+        return _check_only(preset, out, sources, say)
+    if sources is not None:
+        raise ValueError(f"--sources {sources} is only read with --check-only; allowed: "
+                         "--check-only --sources FILE")
     if jobs is not None and (isinstance(jobs, bool) or jobs < 1):
         raise ValueError(f"--jobs {jobs} is invalid; allowed: an integer >= 1")
     out = Path(out)
@@ -113,8 +126,38 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     else:
         say(f"{name}: all {len(specs)} runs are done")
     report = _write_report(preset, specs, out, say, changes=changes)
+    claims = _claims_table(preset, out, say)
     say(f"report: {report['dir']} ({time.time() - t0:.0f} s)")
-    return {"runs": len(specs), "ran": len(todo), "report": report}
+    return {"runs": len(specs), "ran": len(todo), "report": report, "claims": claims}
+
+
+def _check_only(preset, out: str | Path, sources: str | Path | None,
+                say: Callable[[str], None]) -> dict[str, Any]:
+    from lili.experiments.claims import check_claims, claims_markdown, load_sources, out_layout
+
+    if sources is None and not Path(out).is_dir():
+        raise ValueError(f"--check-only: --out {out} is not a folder; allowed: a folder of "
+                         "runs in the preset layout, or --sources FILE")
+    locate = load_sources(sources) if sources is not None else out_layout(out)
+    results = check_claims(preset, locate)
+    say(f"## Claims of `{preset.name}`, checked against "
+        f"{sources if sources is not None else out} (nothing trained)\n")
+    say(claims_markdown(results))
+    return {"claims": results}
+
+
+def _claims_table(preset, out: Path, say: Callable[[str], None]) -> list:
+    """Check the preset's claims against the finished runs under ``out``; print the table and
+    write it to ``out/<name>/report/claims.md`` (a FAIL is printed like a PASS, never left
+    out)."""
+    from lili.experiments.claims import check_claims, claims_markdown, out_layout
+
+    results = check_claims(preset, out_layout(out))
+    if results:
+        text = f"## Claims of `{preset.name}`\n\n{claims_markdown(results)}"
+        (out / preset.name / "report" / "claims.md").write_text(text, encoding="utf-8")
+        say(text)
+    return results
 
 
 def _changes(overrides: dict[str, Any] | None, env_kwargs: dict[str, Any] | None) -> str:
@@ -144,8 +187,9 @@ def _report_only(name: str, preset, specs: list[RunSpec], status: dict[RunSpec, 
     say(f"{name}: interim report from {len(done)} of {len(specs)} runs (the rest are not "
         f"finished; nothing is started)")
     report = _write_report(preset, done, out, say, planned=specs, changes=changes)
+    claims = _claims_table(preset, out, say)
     say(f"report: {report['dir']}")
-    return {"runs": len(specs), "ran": 0, "report": report}
+    return {"runs": len(specs), "ran": 0, "report": report, "claims": claims}
 
 
 def _run_all(backend, todo: list[RunSpec], done: int,

@@ -150,6 +150,23 @@ def _parse_cell(text: str, path: Path, line: int, column: str) -> float:
         ) from None
 
 
+_SPECIAL_CELLS = {"": math.nan, "true": 1.0, "false": 0.0, "True": 1.0, "False": 0.0}
+
+
+def _fast_values(body: list[list[str]], width: int) -> np.ndarray | None:
+    """The cells as floats in one pass (what :func:`_parse_cell` gives for these cells, several
+    times faster), or None when a row or cell needs :func:`_parse_cell`'s checks and error
+    message (a short row, a cell ``float`` does not read)."""
+    if not body or any(len(row) != width for row in body):
+        return None
+    special = _SPECIAL_CELLS
+    try:
+        return np.array([[special[c] if c in special else float(c) for c in row]
+                         for row in body], dtype=np.float64)
+    except ValueError:
+        return None
+
+
 def _read_metrics(path: Path) -> dict[str, np.ndarray]:
     """Parse ``metrics.csv`` into columns (see :class:`Run`). Raises ValueError when malformed."""
     try:
@@ -173,16 +190,18 @@ def _read_metrics(path: Path) -> dict[str, np.ndarray]:
     # A run that is still being written may end in a half-written line: drop it, but only then.
     if body and len(body[-1]) != len(header) and not raw.endswith(("\n", "\r")):
         body = body[:-1]
-    values = np.empty((len(body), len(header)), dtype=np.float64)
-    for i, row in enumerate(body):
-        line = i + 2
-        if len(row) != len(header):
-            raise ValueError(
-                f"{path}: malformed metrics file, line {line} has {len(row)} fields, "
-                f"the header has {len(header)}"
-            )
-        for j, (cell, column) in enumerate(zip(row, header, strict=True)):
-            values[i, j] = _parse_cell(cell, path, line, column)
+    values = _fast_values(body, len(header))
+    if values is None:
+        values = np.empty((len(body), len(header)), dtype=np.float64)
+        for i, row in enumerate(body):
+            line = i + 2
+            if len(row) != len(header):
+                raise ValueError(
+                    f"{path}: malformed metrics file, line {line} has {len(row)} fields, "
+                    f"the header has {len(header)}"
+                )
+            for j, (cell, column) in enumerate(zip(row, header, strict=True)):
+                values[i, j] = _parse_cell(cell, path, line, column)
     metrics = {name: values[:, j].copy() for j, name in enumerate(header)}
     interaction = metrics["interaction"]
     if np.any(np.isnan(interaction)) or np.any(interaction != np.round(interaction)):

@@ -1,0 +1,329 @@
+"""``lili results``: the one results page, ``docs/results.md``, written from the committed records
+only (every number on it is computed from ``metrics.csv`` files; none is typed by hand).
+
+Per paper item (the parts of the ``paper`` preset): a table of ours beside the paper's, one
+figure (``docs/results/<preset>.png``), the claim checks (:mod:`lili.experiments.claims`),
+which records are the evidence and why (the sources file), and the ``lili reproduce`` commands
+that retrain those runs. Regenerating it from the same records gives the same file, byte for
+byte (``tests/test_results_page.py``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lili.config import AgentConfig, stored_agent_config
+from lili.experiments.claims import (
+    RULE_NOTE,
+    VERDICTS,
+    Evidence,
+    check_claim,
+    claims_for,
+    claims_markdown,
+    load_evidence,
+    load_sources,
+    metric_values,
+)
+from lili.experiments.presets import PRESETS, Group, Preset
+from lili.report.files import Run
+from lili.report.paper import PAPER_TABLES
+from lili.report.stats import iqm_ci, summarize
+from lili.report.style import DPI, algo_color, algo_label, env_title
+from lili.report.tables import fmt_interval, fmt_mean_se
+from lili.report.variants import plot_variants, variant_rows
+
+__all__ = ["write_results_page", "results_markdown", "DEFAULT_SOURCES", "DEFAULT_OUT",
+           "reproduce_commands", "departures"]
+
+DEFAULT_SOURCES = "benchmarks/results/claims_sources.yaml"
+DEFAULT_OUT = "docs/results.md"
+
+
+def departures(run: Run, group: Group, part: Preset) -> list[str]:
+    """What a run changed from its preset's setting, as ``lili reproduce`` flags would set it:
+    ``interactions=N``, agent fields (``--set``) and env options (``--env-kwarg``)."""
+    out = []
+    if run.budget is not None and run.budget != part.interactions:
+        out.append(f"interactions={run.budget}")
+    stored = stored_agent_config(run.config.get("agent"))
+    if isinstance(stored, dict):
+        want = AgentConfig.from_dict(group.config).to_dict()
+        out += [f"{k}={stored[k]}" for k in want if k in stored and stored[k] != want[k]
+                and k != "checkpoint_every"]  # when checkpoints are written changes no number
+    kwargs = run.config.get("env_kwargs") or {}
+    out += [f"env {k}={v}" for k, v in sorted(kwargs.items()) if group.env_kwargs.get(k) != v]
+    return out
+
+
+def _setting(runs: Sequence[Run], group: Group, part: Preset) -> str:
+    found = dict.fromkeys(d for r in runs for d in departures(r, group, part))
+    return ", ".join(f"`{d}`" for d in found) or "the preset's"
+
+
+def _seeds(runs: Sequence[Run]) -> int:
+    return max(r.seed for r in runs) + 1
+
+
+def _owner(folder: str, algo: str) -> Preset:
+    """The first preset (in PRESETS order) that runs ``algo`` in ``folder``."""
+    return next(p for p in PRESETS.values() if not p.includes
+                and any(g.folder == folder and algo in g.algos for g in p.groups))
+
+
+def reproduce_commands(part: Preset, evidence: Evidence) -> list[str]:
+    """``lili reproduce`` commands that retrain the runs behind ``part``'s evidence: one per
+    (preset, setting, seeds), the setting read from the runs' config.yaml."""
+    commands: dict[tuple, list[str]] = {}
+    for group in part.groups:
+        for algo in group.algos:
+            runs = evidence.get((group.folder, algo), [])
+            if not runs:
+                continue
+            owner = _owner(group.folder, algo)
+            owner_group = next(g for g in owner.groups if g.folder == group.folder)
+            for run in runs:
+                key = (owner.name, tuple(departures(run, owner_group, owner)), _seeds(runs))
+                commands.setdefault(key, [])
+                if algo not in commands[key]:
+                    commands[key].append(algo)
+    lines = []
+    for (name, changes, seeds), algos in commands.items():
+        owner = PRESETS[name]
+        cmd = [f"lili reproduce {name}"]
+        if set(owner.algos) - set(algos):
+            cmd.append("--algos " + " ".join(algos))
+        if seeds != owner.seeds:
+            cmd.append(f"--seeds {seeds}")
+        for change in changes:
+            if change.startswith("interactions="):
+                cmd.append(f"--interactions {change.split('=', 1)[1]}")
+            elif change.startswith("env "):
+                cmd.append(f"--env-kwarg {change[4:]}")
+            else:
+                cmd.append(f"--set {change}")
+        line = " ".join(cmd)
+        if line not in lines:
+            lines.append(line)
+    return lines
+
+
+def _paper_cell(row: dict[str, Any]) -> str:
+    cited = []
+    if row.get("paper_return") is not None:
+        cited.append(f"return {row['paper_return']:.2f}")
+    if row.get("paper_success") is not None:
+        cited.append(f"success {100 * row['paper_success']:.0f}%")
+    elif row.get("paper_text"):
+        cited.append(f"success {row['paper_text']}")
+    return ", ".join(cited) or "—"
+
+
+def _interactions(runs: Sequence[Run]) -> str:
+    low, high = min(r.n_interactions for r in runs), max(r.n_interactions for r in runs)
+    return f"{low}" if low == high else f"{low}-{high}"
+
+
+def _env_table(part: Preset, evidence: Evidence) -> tuple[str, list[dict[str, Any]]]:
+    group = part.groups[0]
+    runs = [r for algo in group.algos for r in evidence.get((group.folder, algo), [])]
+    if not runs:
+        return "No committed records.\n", []
+    rows = summarize(runs)
+    has_success = any(r["success_mean"] is not None for r in rows)
+    head = "| algo | return IQM [95% CI] | return mean ± s.e. |"
+    rule = "|---|---:|---:|"
+    if has_success:
+        head += " success IQM [95% CI] | success mean ± s.e. |"
+        rule += "---:|---:|"
+    lines = [head + " seeds | interactions | setting | paper |", rule + "---:|---:|---|---|"]
+    for row in rows:
+        mine = evidence[(group.folder, row["algo"])]
+        ci = row["return_iqm_ci"] or (None, None)
+        cells = [algo_label(row["algo"]), fmt_interval(row["return_iqm"], *ci),
+                 fmt_mean_se(row["return_mean"], row["return_se"], n=row["n"])]
+        if has_success:
+            sci = row["success_iqm_ci"] or (None, None)
+            cells += [fmt_interval(row["success_iqm"], *sci, pct=True),
+                      fmt_mean_se(row["success_mean"], row["success_se"], pct=True, n=row["n"])]
+        cells += [str(row["n"]), _interactions(mine), _setting(mine, group, part),
+                  _paper_cell(row)]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n", rows
+
+
+def _variants(part: Preset, evidence: Evidence) -> tuple[list, list[Run]]:
+    variants, bounds = [], []
+    for group in part.groups:
+        runs = [r for a in group.algos for r in evidence.get((group.folder, a), [])]
+        if group.value is None:
+            bounds += runs
+        elif runs:
+            variants.append((group.label, group.value, runs))
+    return variants, bounds
+
+
+def _variant_table(part: Preset, evidence: Evidence) -> tuple[str, list[dict[str, Any]]]:
+    variants, bounds = _variants(part, evidence)
+    if not variants:
+        return "No committed records.\n", []
+    rows = variant_rows(variants, bounds, part.table)
+    ref = PAPER_TABLES[part.table]
+    lines = [f"| {ref['parameter_label']} | algo | return IQM [95% CI] | return mean ± s.e. "
+             "| seeds | interactions | setting | paper (mean ± s.e.) |",
+             "|---|---|---:|---:|---:|---:|---|---:|"]
+    by_label = {g.label: g for g in part.groups}
+    for r in rows:
+        if r["value"] is None:
+            group = next(g for g in part.groups if g.value is None)
+            mine = evidence.get((group.folder, r["algo"]), [])
+        else:
+            group = by_label[r["label"]]
+            mine = evidence.get((group.folder, r["algo"]), [])
+        value = "—" if r["value"] is None else f"{r['value']:g}"
+        lines.append(
+            f"| {value} | {algo_label(r['algo'])} "
+            f"| {fmt_interval(r['return_iqm'], *(r['return_iqm_ci'] or (None, None)))} "
+            f"| {fmt_mean_se(r['return_mean'], r['return_se'], n=r['n'])} | {r['n']} "
+            f"| {_interactions(mine)} | {_setting(mine, group, part)} "
+            f"| {fmt_mean_se(r['paper_mean'], r['paper_se'], '.4g')} |")
+    return "\n".join(lines) + "\n", rows
+
+
+def _plot_env(part: Preset, evidence: Evidence, rows: list[dict[str, Any]], path: Path) -> None:
+    """Per metric the claims use: every seed's final value (dots), the IQM and its 95% CI
+    (bar), the paper's number where it gives one (hollow square)."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    group = part.groups[0]
+    metrics = [m for m in ("return", "success")
+               if any(c.metric == m for _, c in claims_for(part))]
+    fig, axes = plt.subplots(1, len(metrics), figsize=(5.2 * len(metrics), 3.8),
+                             layout="constrained", squeeze=False)
+    algos = [r["algo"] for r in rows]
+    paper = {r["algo"]: r for r in rows}
+    for ax, metric in zip(axes[0], metrics, strict=True):
+        scale = 100.0 if metric == "success" else 1.0
+        for x, algo in enumerate(algos):
+            values = metric_values(evidence[(group.folder, algo)], metric)
+            if not values:
+                continue
+            color = algo_color(algo)
+            jitter = np.linspace(-0.15, 0.15, len(values)) if len(values) > 1 else [0.0]
+            ax.scatter(x + np.asarray(jitter), scale * np.asarray(values), s=12, color=color,
+                       alpha=0.5, lw=0)
+            point, low, high = iqm_ci(values)
+            err = None if low is None else [[scale * (point - low)], [scale * (high - point)]]
+            ax.errorbar([x], [scale * point], yerr=err, color=color, marker="o", capsize=4,
+                        lw=2)
+            cited = paper[algo].get(f"paper_{metric}")
+            if cited is not None:
+                ax.scatter([x + 0.3], [scale * cited], marker="s", facecolors="none",
+                           edgecolors=color, s=40)
+        ax.set_xticks(range(len(algos)), [algo_label(a) for a in algos], rotation=30,
+                      ha="right", fontsize=8)
+        ax.set_ylabel("final success (%)" if metric == "success" else "final return")
+        ax.grid(True, axis="y", alpha=0.3)
+    fig.suptitle(f"{part.title}: seeds (dots), IQM and 95% CI (bars), paper (squares)",
+                 fontsize=10)
+    fig.savefig(path, dpi=DPI, metadata={"Software": None})
+    plt.close(fig)
+
+
+def _sources_md(part: Preset, locate) -> str:
+    lines, seen = [], set()
+    for group in part.groups:
+        for source in locate(group):
+            key = (str(source.path), source.algos)
+            if key in seen:
+                continue
+            seen.add(key)
+            algos = ("" if source.algos is None
+                     else " (" + ", ".join(algo_label(a) for a in source.algos) + ")")
+            note = f": {source.note}" if source.note else ""
+            lines.append(f"- `{source.path.as_posix()}`{algos}{note}")
+    return "\n".join(lines) + "\n"
+
+
+def _section(part: Preset, locate, evidence: Evidence, figures: Path | None,
+             rel: str) -> tuple[str, list]:
+    if part.kind == "table":
+        table, rows = _variant_table(part, evidence)
+    else:
+        table, rows = _env_table(part, evidence)
+    results = [(part, check_claim(part, claim, evidence)) for _, claim in claims_for(part)]
+    figure = ""
+    if rows:
+        png = f"{part.name}.png"
+        if figures is not None and part.kind == "table":
+            plot_variants(rows, part.table, figures / png)
+        elif figures is not None:
+            _plot_env(part, evidence, rows, figures / png)
+        figure = f"![{part.title}]({rel}/{png})\n\n"
+    envs = ", ".join(env_title(e) for e in part.envs)
+    commands = reproduce_commands(part, evidence)
+    text = (f"## {part.title}\n\nPaper: {part.where}. Env: {envs}. Ours: {part.metric}.\n\n"
+            f"{table}\n{figure}**Claims**\n\n"
+            f"{claims_markdown(results, with_part=False, rules=False)}\n"
+            f"**Evidence** (committed records)\n\n{_sources_md(part, locate)}\n"
+            "**Reproduce** (retrains these runs into `runs/reproduce`; the last command "
+            "checks the claims)\n\n```\n" + "\n".join(commands)
+            + f"\nlili reproduce {part.name} --check-only\n```\n")
+    return text, results
+
+
+def results_markdown(sources: str | Path = DEFAULT_SOURCES,
+                     figures: str | Path | None = None, rel: str = "results") -> str:
+    """The page's markdown from the records ``sources`` names; figures are written into
+    ``figures`` (none when None) and linked as ``rel/<preset>.png``."""
+    locate = load_sources(sources)
+    paper = PRESETS["paper"]
+    evidence = load_evidence(paper, locate)
+    fig_dir = Path(figures) if figures is not None else None
+    if fig_dir is not None:
+        fig_dir.mkdir(parents=True, exist_ok=True)
+    sections, all_results = [], []
+    for name in paper.includes:
+        part = PRESETS[name]
+        text, results = _section(part, locate, evidence, fig_dir, rel)
+        sections.append(text)
+        all_results += results
+    counts = {v: sum(r.verdict == v for _, r in all_results) for v in VERDICTS}
+    summary = claims_markdown(all_results, rules=False)
+    head = (
+        "# Results\n\n"
+        "<!-- Generated by `lili results` from the committed records; do not edit by hand. -->\n\n"
+        "Every number on this page is computed by `lili results` from the per-interaction "
+        f"records under `benchmarks/results/runs/` that `{Path(sources).as_posix()}` names "
+        "for each experiment; none is typed by hand. Final = the mean over the last 10% of a "
+        "run's interactions (success: the same over the success flag; a striker's mode: its "
+        "share of the last 200 interactions), one number per seed. Across seeds: the "
+        "interquartile mean (IQM; with 3 seeds the mean) with a percentile bootstrap 95% "
+        "confidence interval, beside mean ± s.e.; P(>) is the probability of improvement "
+        "(Agarwal et al. 2021) with its stratified bootstrap interval. 'Setting' names what a "
+        "row's runs changed from the preset (`lili reproduce --set` / `--interactions`). "
+        "The lab journal behind these records is `docs/journal/2026-11-to-12.md`.\n\n"
+        f"**{counts['PASS']} of the paper's {len(all_results)} claims PASS, "
+        f"{counts['FAIL']} FAIL, {counts['too few seeds']} have too few seeds.** {RULE_NOTE} "
+        "The same table, from the same records, without writing anything: `lili reproduce "
+        f"paper --check-only --sources {Path(sources).as_posix()}`.\n\n{summary}\n"
+    )
+    return head + "\n".join(sections)
+
+
+def write_results_page(sources: str | Path = DEFAULT_SOURCES,
+                       out: str | Path = DEFAULT_OUT) -> Path:
+    """Write the page to ``out`` and its figures to ``results/`` beside it; return its path."""
+    out = Path(out)
+    if out.exists() and not out.is_file():
+        raise ValueError(f"--out {out} is not a file; allowed: a markdown file path")
+    text = results_markdown(sources, out.parent / "results", "results")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text, encoding="utf-8")
+    return out
