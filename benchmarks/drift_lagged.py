@@ -5,7 +5,7 @@
 In ``lili/InfluenceDrift-v0`` LILI and the Oracle (last interaction) (``--algo oracle-last``:
 SAC told the partner's goal in the last interaction and that interaction's last observation
 and action) both stay at the no-information level, while the Oracle, told the current goal,
-learns to hold it next to the start (``benchmarks/README.md``, "Drift with a returning
+learns to hold it next to the start (``docs/journal/2026-11-to-12.md``, "Drift with a returning
 partner"). The partner reacts to the *sign* of where the ego ended, so for the lagged agent
 the next interaction's value steps at x_end = 0, inside a continuous input. This script
 trains SAC (the default agent config, as the ``influence`` preset, or ``--set`` fields) on

@@ -84,7 +84,7 @@ Choices where the appendix is silent (and why):
   from the top of the screen and the steps spent on the ground (the pad lander's -45.5 is
   46.5 below the +1 of a perfect landing, and how fast it got down matters as much as where),
   and SAC, LILI and the Oracle trained under it for 2000 interactions learned to sit in the
-  middle, not to land (``benchmarks/README.md``). Paid as a difference, the per-step
+  middle, not to land (``docs/journal/2026-11-to-12.md``). Paid as a difference, the per-step
   terms telescope to ``phi(s_{T-1}) - phi(s_0)`` plus fuel (the last step pays the terminal
   reward instead): potential-based shaping (Ng et al. 1999) up to that last step, which keeps
   the sparse task's preferences (land on the pad: +1) nearly intact, and the ranking is
@@ -100,7 +100,7 @@ Choices where the appendix is silent (and why):
   per-step discount an agent that bootstraps across the boundary (LILI, SAC, the Oracle)
   reaches their value sooner by ending sooner, so they land in about 24 steps where LILI (no
   influence) takes about 40, and LILI lands less often. ``AgentConfig(boundary_discount=
-  "horizon")`` removes that pay (``benchmarks/README.md``, "Lunar Lander").
+  "horizon")`` removes that pay (``docs/journal/2026-11-to-12.md``, "Lunar Lander").
 - **Terrain and initial push.** Gymnasium draws them from its lander's ``np_random``. At every
   interaction the lander is reset with a seed drawn from this env's ``np_random``, so
   ``reset(seed)`` replays the whole sequence (terrain, push, engine dispersion, pads).

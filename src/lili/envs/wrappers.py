@@ -78,7 +78,7 @@ class LastInteractionObservation(gym.Wrapper):
     i itself. It bounds from above what LILI, whose encoder reads only tau^{i-1}, can get from
     its latent. Where it falls short of the Oracle, the last interaction does not determine the
     partner's next strategy or acting on it is harder to learn (in Drift both, see
-    ``benchmarks/README.md``, "Drift with a returning partner").
+    ``docs/journal/2026-11-to-12.md``, "Drift with a returning partner").
 
     With ``outcome=True`` it also appends the last interaction's ``info["outcome"]`` (what the
     partner reacts to, a number), for envs whose last observation leaves it out: in air hockey

@@ -253,8 +253,8 @@ class AirHockeyEnv(RepeatedInteractionEnv):
             interaction's last, where it is the side the puck ended on (-1 left of the paddle,
             +1 right; ``info["outcome"]``). False, the default, is the appendix's observation.
             A departure from the paper for one experiment (issue 13, "Where the blind modes
-            come from" in benchmarks/README.md): the striker's next mode depends on that side,
-            which the appendix's observation shows the encoder only through the distance
+            come from" in docs/journal/2026-11-to-12.md): the striker's next mode depends on
+            that side, which the appendix's observation shows the encoder only through the distance
             cost. The policy never acts on a last observation, so only the encoder (which
             reads each transition's next observation) gains from it.
     """
