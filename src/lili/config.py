@@ -57,7 +57,7 @@ class AgentConfig:
             next interaction's value weighs without discounting the rewards within one;
             0 gives the last step y = r, as ``boundary="cut"``. Measured on Lunar Lander,
             where the pad does not depend on the ego and bootstrapping across the boundary
-            costs LILI against LILI (no influence) (``benchmarks/README.md``).
+            costs LILI against LILI (no influence) (``docs/journal/2026-11-to-12.md``).
         boundary_discount: how far away the next interaction is when one ends early.
             ``step`` (the paper): every step discounts by ``gamma``, so an interaction that
             ends at step t < H reaches the next one H - 1 - t steps sooner, and an agent that
@@ -82,7 +82,7 @@ class AgentConfig:
             strategies. Measured on
             ``lili/InfluenceDrift-v0``, where a policy learns to influence from the partner's
             predicted goal given as indicators but not from LILI's continuous latent
-            (``benchmarks/README.md``, "Drift: what a lagged agent needs to influence").
+            (``docs/journal/2026-11-to-12.md``, "Drift: what a lagged agent needs to influence").
         latent_balance: with a categorical latent, the weight in J_rep of log K - H of the
             batch's mean category probabilities (0 = off), which keeps the encoder from
             sending every interaction to one category (``lili.agents.lili.category_imbalance``).
@@ -99,7 +99,7 @@ class AgentConfig:
             critic and acting use z itself. What z carries beyond the partner's next
             strategy then costs J_rep without helping the decoder, so it shrinks: the spread
             of z within one strategy, which on Drift stops a policy from learning to
-            influence (``benchmarks/README.md``, "Drift: a bottlenecked latent").
+            influence (``docs/journal/2026-11-to-12.md``, "Drift: a bottlenecked latent").
         latent_target: what trains the encoder E. ``decoder`` (the paper): D(s, a, z^i)
             predicts tau^i's transitions from z^i = E(tau^{i-1}). ``posterior``: a second
             encoder P reads tau^i itself, D predicts tau^i from P(tau^i), and E is regressed
@@ -118,8 +118,8 @@ class AgentConfig:
             are then one critic input, however far apart they lie in z: on Drift a learned z
             moves within one predicted strategy by about half the distance between strategies,
             and a critic that reads a code which moves that much does not learn to influence
-            (``benchmarks/README.md``, "Drift: the noise stops SAC through the critic"). The
-            actor and acting still read z.
+            (``docs/journal/2026-11-to-12.md``, "Drift: the noise stops SAC through the
+            critic"). The actor and acting still read z.
         history: number of past interactions the encoder reads (1 = the paper's LILI).
         batch_interactions, per_interaction: a batch is ``batch_interactions`` interactions
             with ``per_interaction`` transitions each (32 x 8 = 256, as in LILI's code), drawn
@@ -138,7 +138,7 @@ class AgentConfig:
             logged like the others (``summary.json`` adds ``final_return_policy`` and
             ``final_success_policy`` without them). Measured on Drift, where the greedy
             policy never ends an interaction on the side that influence needs
-            (``benchmarks/README.md``).
+            (``docs/journal/2026-11-to-12.md``).
         target_entropy: None = -|A| (SAC's default).
         init_alpha: initial temperature (0.1: the rewards here are O(0.05..1) per step, so
             SAC's usual 1.0 lets the entropy bonus swamp them for hundreds of interactions).
