@@ -37,7 +37,7 @@ import numpy as np
 import yaml
 
 from lili.experiments.presets import HISTORY, NOISE, PRESETS, Group, Preset
-from lili.report.files import SUMMARY_FILE, Run, find_runs
+from lili.report.files import CONFIG_FILE, METRICS_FILE, SUMMARY_FILE, Run, find_runs
 from lili.report.paper import PAPER, PAPER_TABLES
 from lili.report.stats import (
     STRATEGY_WINDOW,
@@ -45,7 +45,7 @@ from lili.report.stats import (
     iqm_ci,
     probability_of_improvement_ci,
 )
-from lili.report.style import env_key
+from lili.report.style import algo_label, env_key
 from lili.report.tables import fmt_interval
 
 __all__ = ["Source", "Side", "Claim", "ClaimResult", "CLAIMS", "claims_for", "check_claims",
@@ -165,19 +165,32 @@ def _table_pair(table: str, a: Any, b: Any) -> str:
     return f"{_num(one(a))} vs {_num(one(b))} (Table {2 if table == 'noise' else 3})"
 
 
+def _above(a: str, b: str, paper: str, metric: str = "return", min_seeds: int = 3,
+           what: str = "success") -> Claim:
+    """``A > B`` on ``metric`` between two algos of the preset's own folder."""
+    named = "" if metric == "return" else f" ({what})"
+    return Claim(f"{algo_label(a)} > {algo_label(b)}{named}", metric, "greater", Side(a), Side(b),
+                 paper=paper, min_seeds=min_seeds)
+
+
+def _success(algo: str, rule: str, target: float, paper: str, tolerance: float = 0.15,
+             what: str = "success") -> Claim:
+    """A threshold (``at_least`` / ``at_most``) or band (``near``) on ``algo``'s success."""
+    bound = {"at_least": f">= {_pct(target)}", "at_most": f"<= {_pct(target)}",
+             "near": f"{_pct(target)} ± {100 * tolerance:.0f}"}[rule]
+    return Claim(f"{algo_label(algo)} {what} {bound}", "success", rule, Side(algo),
+                 target=target, tolerance=tolerance if rule == "near" else None, paper=paper)
+
+
 def _point_mass() -> tuple[Claim, ...]:
     fig = "Sec. 5.2, Fig. 4"
+    best = f"LILAC the best-performing baseline ({fig})"
     return (
-        Claim("LILI > SAC", "return", "greater", Side("lili"), Side("sac"),
-              paper=_paper_pair(PM, "lili", "sac", "Table 2")),
-        Claim("LILI > LILI (no influence)", "return", "greater", Side("lili"),
-              Side("lili-no-influence"), paper=f"higher, no number ({fig})"),
-        Claim("LILI > LILAC", "return", "greater", Side("lili"), Side("lilac"),
-              paper=f"LILI above the best baseline ({fig})"),
-        Claim("LILAC > SAC", "return", "greater", Side("lilac"), Side("sac"),
-              paper=f"LILAC the best-performing baseline ({fig})"),
-        Claim("LILAC > SLAC", "return", "greater", Side("lilac"), Side("slac"),
-              paper=f"LILAC the best-performing baseline ({fig})"),
+        _above("lili", "sac", _paper_pair(PM, "lili", "sac", "Table 2")),
+        _above("lili", "lili-no-influence", f"higher, no number ({fig})"),
+        _above("lili", "lilac", f"LILI above the best baseline ({fig})"),
+        _above("lilac", "sac", best),
+        _above("lilac", "slac", best),
     )
 
 
@@ -208,94 +221,68 @@ def _history() -> tuple[Claim, ...]:
     return tuple(claims)
 
 
-def _level(where: str) -> Claim:
-    return Claim("LILI ≈ LILI (no influence)", "return", "level", Side("lili"),
-                 Side("lili-no-influence"), paper=f"one curve ({where})")
+def _level(a: str, b: str, paper: str, metric: str = "return") -> Claim:
+    what = {"return": "", "success": " (success)"}[metric]
+    return Claim(f"{algo_label(a)} ≈ {algo_label(b)}{what}", metric, "level", Side(a), Side(b),
+                 paper=paper)
 
 
 def _driving_2d() -> tuple[Claim, ...]:
     fig, app = "Fig. 5", "Appendix D.2"
     return (
-        Claim("LILI > SAC (success)", "success", "greater", Side("lili"), Side("sac"),
-              paper=f"near 100% vs about 50% or below ({fig})"),
-        _level(fig),
-        Claim("LILI success >= 90%", "success", "at_least", Side("lili"), target=0.9,
-              paper=f"near 100% ({fig})"),
-        Claim("Oracle success >= 90%", "success", "at_least", Side("oracle"), target=0.9,
-              paper=f"near 100% ({fig})"),
-        Claim("SAC success <= 60%", "success", "at_most", Side("sac"), target=0.6,
-              paper=f"about 50% or below ({app})"),
-        Claim("LILAC success <= 60%", "success", "at_most", Side("lilac"), target=0.6,
-              paper=f"closer towards the 50% bound ({app})"),
-        Claim("LILI (no influence) > SLAC (success)", "success", "greater",
-              Side("lili-no-influence"), Side("slac"),
-              paper=f"SLAC persistently fails ({app})"),
+        _above("lili", "sac", f"near 100% vs about 50% or below ({fig})", "success"),
+        _level("lili", "lili-no-influence", f"one curve ({fig})"),
+        _success("lili", "at_least", 0.9, f"near 100% ({fig})"),
+        _success("oracle", "at_least", 0.9, f"near 100% ({fig})"),
+        _success("sac", "at_most", 0.6, f"about 50% or below ({app})"),
+        _success("lilac", "at_most", 0.6, f"closer towards the 50% bound ({app})"),
+        _above("lili-no-influence", "slac", f"SLAC persistently fails ({app})", "success"),
     )
 
 
 def _driving_steer() -> tuple[Claim, ...]:
     fig, app = "Fig. 5", "Appendix D.3"
     return (
-        Claim("LILI > SAC (success)", "success", "greater", Side("lili"), Side("sac"),
-              paper=f"LILI variants pass, SAC about 50% ({fig})"),
-        _level(fig),
-        Claim("Oracle success >= 90%", "success", "at_least", Side("oracle"), target=0.9,
-              paper=f"converges to an optimal solution ({app})"),
-        Claim("LILI (no influence) success >= 90%", "success", "at_least",
-              Side("lili-no-influence"), target=0.9,
-              paper=f"passes on each interaction, slowly ({app})"),
-        Claim("SAC success 50% ± 15", "success", "near", Side("sac"), target=0.5,
-              tolerance=0.15, paper=f"nearly 50%, mixes its lanes ({app})"),
-        Claim("LILI (no influence) > SLAC (success)", "success", "greater",
-              Side("lili-no-influence"), Side("slac"),
-              paper=f"SLAC keeps one lane and collides ({app})"),
-        Claim("LILI (no influence) > LILAC (success)", "success", "greater",
-              Side("lili-no-influence"), Side("lilac"),
-              paper=f"LILAC keeps one lane and collides ({app})"),
+        _above("lili", "sac", f"LILI variants pass, SAC about 50% ({fig})", "success"),
+        _level("lili", "lili-no-influence", f"one curve ({fig})"),
+        _success("oracle", "at_least", 0.9, f"converges to an optimal solution ({app})"),
+        _success("lili-no-influence", "at_least", 0.9,
+                 f"passes on each interaction, slowly ({app})"),
+        _success("sac", "near", 0.5, f"nearly 50%, mixes its lanes ({app})"),
+        _above("lili-no-influence", "slac", f"SLAC keeps one lane and collides ({app})",
+               "success"),
+        _above("lili-no-influence", "lilac", f"LILAC keeps one lane and collides ({app})",
+               "success"),
     )
 
 
 def _lunar_lander() -> tuple[Claim, ...]:
     fig, app = "Fig. 5", "Appendix D.1"
-    about_half = dict(rule="near", target=0.5, tolerance=0.15)
     return (
-        Claim("LILI > SAC", "return", "greater", Side("lili"), Side("sac"),
-              paper=f"LILI above the baselines ({fig})"),
-        _level(fig),
-        Claim("LILI (no influence) ≈ Oracle (success)", "success", "level",
-              Side("lili-no-influence"), Side("oracle"),
-              paper=f"near identical, both land ({app})"),
-        Claim("Oracle success >= 90%", "success", "at_least", Side("oracle"), target=0.9,
-              paper=f"learns to land on the pad ({app})"),
-        Claim("SAC success 50% ± 15", "success", a=Side("sac"), paper=f"near 50% ({app})",
-              **about_half),
-        Claim("SLAC success 50% ± 15", "success", a=Side("slac"), paper=f"near 50% ({app})",
-              **about_half),
-        Claim("LILAC success 50% ± 15", "success", a=Side("lilac"),
-              paper=f"near 50%, no better than SAC ({app})", **about_half),
+        _above("lili", "sac", f"LILI above the baselines ({fig})"),
+        _level("lili", "lili-no-influence", f"one curve ({fig})"),
+        _level("lili-no-influence", "oracle", f"near identical, both land ({app})", "success"),
+        _success("oracle", "at_least", 0.9, f"learns to land on the pad ({app})"),
+        _success("sac", "near", 0.5, f"near 50% ({app})"),
+        _success("slac", "near", 0.5, f"near 50% ({app})"),
+        _success("lilac", "near", 0.5, f"near 50%, no better than SAC ({app})"),
     )
 
 
 def _air_hockey() -> tuple[Claim, ...]:
     ref, where = PAPER[AH], "Sec. 5.3"
-    success = ref["success"]
+    rate = ref["success"]
     left = ref["strategy_freq"]["lili"]["left"]
+    blocks = [_success(a, "near", rate[a], f"{_pct(rate[a])} ({where})", 0.1, "block rate")
+              for a in ("random", "sac", "lili")]
     return (
-        Claim(f"Random block rate {_pct(success['random'])} ± 10", "success", "near",
-              Side("random"), target=success["random"], tolerance=0.1,
-              paper=f"{_pct(success['random'])} ({where})"),
-        Claim(f"SAC block rate {_pct(success['sac'])} ± 10", "success", "near", Side("sac"),
-              target=success["sac"], tolerance=0.1, paper=f"{_pct(success['sac'])} ({where})"),
-        Claim(f"LILI block rate {_pct(success['lili'])} ± 10", "success", "near", Side("lili"),
-              target=success["lili"], tolerance=0.1,
-              paper=f"{_pct(success['lili'])} ({where})"),
-        Claim("LILI > SAC (block rate)", "success", "greater", Side("lili"), Side("sac"),
-              paper=f"{_pct(success['lili'])} vs {_pct(success['sac'])} ({where})"),
+        *blocks,
+        _above("lili", "sac", f"{_pct(rate['lili'])} vs {_pct(rate['sac'])} ({where})",
+               "success", what="block rate"),
         # Five seeds: the issue's bar for the paper's headline (the gap is small against the
         # spread between seeds, so three or four cannot make it decisive).
-        Claim("LILI > LILI (no influence)", "return", "greater", Side("lili"),
-              Side("lili-no-influence"), min_seeds=5,
-              paper=_paper_pair(AH, "lili", "lili-no-influence", "Fig. 6")),
+        _above("lili", "lili-no-influence",
+               _paper_pair(AH, "lili", "lili-no-influence", "Fig. 6"), min_seeds=5),
         Claim(f"LILI's striker fires left {_pct(left)} ± 10", f"strategy:{_LEFT}", "near",
               Side("lili"), target=left, tolerance=0.1, paper=f"{_pct(left)} ({where})"),
         Claim("LILI (no influence)'s striker fires left 33% ± 10 (uniform)",
@@ -394,11 +381,20 @@ def load_sources(path: str | Path) -> Locate:
     return locate
 
 
+def _finished_runs(where: Path) -> list[Run]:
+    """The runs under ``where`` that finished (``summary.json`` beside their records); a run
+    still going is not read at all."""
+    dirs = sorted(p.parent for p in where.rglob(SUMMARY_FILE)
+                  if (p.parent / METRICS_FILE).is_file() and (p.parent / CONFIG_FILE).is_file())
+    return find_runs(dirs) if dirs else []
+
+
 def load_evidence(preset: Preset, locate: Locate) -> Evidence:
     """The finished runs (with ``summary.json``) of every group of ``preset``, by (group
-    folder, algo). A run of another env or of other env kwargs than its group's is an error
-    naming it (a sources file pointing at the wrong folder); agent settings may differ from the
-    preset's (they are the departures a report names)."""
+    folder, algo), runs of other envs or algos left out. A run without an env option that
+    defines its group (``step_noise`` for a noise row) is an error naming it (a sources file
+    pointing at the wrong folder); other values of it and other agent settings are the
+    departures a report names (``--env-kwarg``, ``--set``)."""
     parts = [PRESETS[n] for n in preset.includes] or [preset]
     evidence: Evidence = {}
     seen: dict[tuple[str, str, int], Path] = {}
@@ -406,17 +402,17 @@ def load_evidence(preset: Preset, locate: Locate) -> Evidence:
     for group in (g for part in parts for g in part.groups):
         for where, only, _note in locate(group):
             if where not in loaded:
-                loaded[where] = [r for r in find_runs([where])
-                                 if (r.path / SUMMARY_FILE).is_file()]
+                loaded[where] = _finished_runs(where)
             for run in loaded[where]:
                 if env_key(run.env) != env_key(group.env) or run.algo not in group.algos \
                         or (only is not None and run.algo not in only):
                     continue
                 kwargs = run.config.get("env_kwargs") or {}
-                if any(kwargs.get(k) != v for k, v in group.env_kwargs.items()):
-                    raise ValueError(f"{run.path}: env kwargs {kwargs} are not the group "
-                                     f"{group.folder!r}'s {group.env_kwargs}; allowed: runs "
-                                     "of that group only")
+                missing = [k for k in group.env_kwargs if k not in kwargs]
+                if missing:  # another group's runs (e.g. noise-free runs for a sigma row)
+                    raise ValueError(f"{run.path}: env kwargs {kwargs} lack the group "
+                                     f"{group.folder!r}'s {', '.join(missing)}; allowed: runs "
+                                     f"with {group.env_kwargs} (or an --env-kwarg over them)")
                 key = (group.folder, run.algo)
                 ident = (group.folder, run.algo, run.seed)
                 if ident in seen:
