@@ -14,6 +14,7 @@ from lili.report.paper import paper_reference
 from lili.report.stats import (
     STRATEGY_WINDOW,
     group_runs,
+    iqm_ci,
     moving_average,
     strategy_frequencies,
     strategy_names,
@@ -219,11 +220,13 @@ def plot_strategy_frequencies(runs: Iterable[Run], out_png: str | Path,
 
     Like the paper's air hockey figure (how often the striker fired left, middle, right over
     the final 200 interactions): one subplot per env with discrete strategy ids, one group of
-    bars per strategy, one bar per algo (seeds pooled). Raises ValueError when no run logs a
-    strategy id. Returns the path written.
+    bars per strategy, one bar per algo (seeds pooled), with a whisker for the bootstrap 95%
+    interval of the IQM of the per-seed shares (:func:`lili.report.stats.iqm_ci`; none with
+    one seed). Raises ValueError when no run logs a strategy id. Returns the path written.
     """
     panels = []
-    for env, by_algo in group_runs(runs).items():
+    by_env = group_runs(runs)
+    for env, by_algo in by_env.items():
         freqs = {algo: f for algo, group in by_algo.items()
                  if (f := strategy_frequencies(group, last)) is not None}
         if freqs:
@@ -242,6 +245,12 @@ def plot_strategy_frequencies(runs: Iterable[Run], out_png: str | Path,
             n = seeds[algo]
             ax.bar(xs, f, width, color=algo_color(algo),
                    label=f"{algo_label(algo)} ({n} seed{'s' * (n > 1)})")
+            per_seed = [p for r in by_env[env][algo]
+                        if (p := strategy_frequencies([r], last)) is not None]
+            for x, i in zip(xs, range(k), strict=True):
+                _, low, high = iqm_ci([p[i] if i < len(p) else 0.0 for p in per_seed])
+                if low is not None:
+                    ax.plot([x, x], [low, high], color="0.15", lw=1.0)
         ax.axhline(1.0 / k, color="0.4", ls=":", lw=1.0, label="uniform")
         ax.set_xticks(np.arange(k), strategy_names(env, k))
         ax.set_ylim(0, 1)
