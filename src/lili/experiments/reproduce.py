@@ -140,6 +140,9 @@ def _check_only(preset, out: str | Path, sources: str | Path | None,
                          "runs in the preset layout, or --sources FILE")
     locate = load_sources(sources) if sources is not None else out_layout(out)
     results = check_claims(preset, locate)
+    if not results:
+        say(f"{preset.name}: states no claim of the paper (not a paper item); nothing to check")
+        return {"claims": results}
     say(f"## Claims of `{preset.name}`, checked against "
         f"{sources if sources is not None else out} (nothing trained)\n")
     say(claims_markdown(results))
