@@ -7,6 +7,10 @@
   calls training); :mod:`~lili.experiments.local` and :mod:`~lili.experiments.ray_backend`
   execute it.
 - :mod:`~lili.experiments.results`: the preset's report (through :mod:`lili.report`).
+- :mod:`~lili.experiments.claims`: the paper's claims per preset, checked PASS / FAIL / too
+  few seeds (``lili reproduce NAME --check-only``).
+- :mod:`~lili.experiments.page`: ``lili results``, the results page ``docs/results.md`` from
+  the committed records.
 """
 
 from lili.experiments.plan import RunSpec, plan, run_status
