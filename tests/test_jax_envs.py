@@ -3,8 +3,9 @@
 The equivalence tests play the Gymnasium env and the JAX env side by side, step by step, with
 the same actions (random, partly outside [-1, 1] so that clipping is exercised, with a drift per
 interaction so that interactions end on both sides of what the partner reacts to), over several
-interactions, for the default partner, the noisy partner, the history partner and the mirrored
-rule, and for the influence suite's Drift and Switch.
+interactions: Point Mass with the default partner, the noisy partner, the history partner and
+the mirrored rule, Driving (2D) with the default and the history partner, and the influence
+suite's Drift and Switch.
 
 Aligned: the partner's *random numbers*. NumPy and JAX generators differ, so the JAX env is
 driven through ``reset_with`` / ``step_with`` with the numbers the Gymnasium env's partner
@@ -16,8 +17,8 @@ env on its own and compared: observations (after reset, every step and every new
 interaction), rewards, ``terminated``, ``truncated``, the strategy and strategy id in ``info``
 (so the whole sequence of strategies, i.e. every partner update: direction, majority vote,
 noise scaling, drift, returns, mode table), the ``interaction`` and ``t`` counters and the
-``outcome`` at each interaction's end. Floats to 1e-5 (JAX works in float32, the references in
-float64); everything else exactly.
+``outcome`` and ``success`` (where defined) at each interaction's end. Floats to 1e-5 (JAX
+works in float32, the references in float64); everything else exactly.
 
 Not compared there: how the JAX env draws its own random numbers from a key (``reset`` /
 ``step``); the separate tests below check that those draws have the references' ranges and
@@ -34,9 +35,11 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from lili.envs.driving2d import Driving2DEnv
 from lili.envs.influence.drift import InfluenceDriftEnv
 from lili.envs.influence.switch import InfluenceSwitchEnv
 from lili.envs.jax import (
+    Driving2D,
     InfluenceDrift,
     InfluenceSwitch,
     PointMass,
@@ -47,6 +50,7 @@ from lili.envs.jax import (
     stack,
 )
 from lili.envs.jax import drift as jdrift
+from lili.envs.jax import driving2d as jdriving
 from lili.envs.jax import point_mass as jpm
 from lili.envs.jax import switch as jswitch
 from lili.envs.jax.core import JaxRepeatedEnv
@@ -82,6 +86,10 @@ SWITCH = (InfluenceSwitchEnv, InfluenceSwitch(),
           lambda env: jswitch.ResetDraws(mode=jnp.asarray(env.partner.mode, jnp.int32)),
           lambda rng: ())
 
+DRIVING = (Driving2DEnv, Driving2D(),
+           lambda env: jdriving.ResetDraws(right=jnp.asarray(env.partner.lane > 0)),
+           lambda rng: ())
+
 CASES = {
     "point-mass": (PM, {}, 5),
     "noise": (PM, {"step_noise": 0.6, "horizon": 10}, 12),
@@ -91,6 +99,8 @@ CASES = {
     "drift": (DRIFT, {}, 30),
     "drift-returns": (DRIFT, {"returns": 0.5, "horizon": 5}, 30),
     "switch": (SWITCH, {}, 40),
+    "driving-2d": (DRIVING, {}, 12),
+    "driving-2d-history": (DRIVING, {"history": 3}, 20),
 }
 
 
@@ -101,14 +111,14 @@ def _close(a, b, what):
 
 def _play_both(case: str, seed: int = 3):
     """Play both envs side by side (see the module docstring); return the per-interaction
-    outcomes and strategy ids/strategies for the checks that the case exercised something."""
+    outcomes, successes and strategies for the checks that the case exercised something."""
     (gym_cls, jenv, reset_draws, update_draws), kwargs, n = CASES[case]
     genv = gym_cls(**kwargs)
     params = jenv.params(**kwargs)
     rng = np.random.default_rng(seed)
     g_obs, g_info = genv.reset(seed=seed)
     j_obs, state = reset_with(jenv, reset_draws(genv), params)
-    outcomes, strategies = [], []
+    outcomes, successes, strategies = [], [], []
     for i in range(n):
         if i:
             g_obs, g_info = genv.reset()
@@ -139,25 +149,31 @@ def _play_both(case: str, seed: int = 3):
             assert bool(j_info["active"])
             if g_term or g_trunc:
                 assert j_info["outcome"].item() == g_info["outcome"], where + " outcome"
+                assert ("success" in j_info) == ("success" in g_info), where
+                if "success" in g_info:
+                    assert bool(j_info["success"]) == g_info["success"], where + " success"
                 outcomes.append(g_info["outcome"])
+                successes.append(g_info.get("success"))
                 break
-    return outcomes, np.array(strategies)
+    return outcomes, successes, np.array(strategies)
 
 
 @pytest.mark.parametrize("case", list(CASES))
 def test_jax_env_follows_the_gymnasium_env(case: str) -> None:
-    outcomes, strategies = _play_both(case)
+    outcomes, successes, strategies = _play_both(case)
     # The case exercised the partner: both kinds of ending, and the strategy moved.
     assert len(set(outcomes)) >= (3 if case == "switch" else 2), outcomes
-    assert len({tuple(s) for s in strategies}) > 2
+    if case.startswith("driving"):
+        assert len(set(successes)) == 2, successes
+    assert len({tuple(s) for s in strategies}) >= 2
     kwargs = CASES[case][1]
     if kwargs.get("step_noise"):  # noisy steps leave the 0.2 grid
         theta = np.arctan2(strategies[:, 1] + 0.05, strategies[:, 0]) / STEP
         assert np.abs(theta - np.round(theta)).max() > 0.05
     if kwargs.get("history", 1) > 1:  # the majority overruled the last outcome at least once
-        n = kwargs["history"]
-        majority = [np.mean(outcomes[max(0, k - n + 1):k + 1]) for k in range(len(outcomes))]
-        assert any(m != 0.5 and (m > 0.5) != o for m, o in zip(majority, outcomes, strict=True))
+        n, votes = kwargs["history"], np.asarray(outcomes) > 0  # inside / right
+        majority = [np.mean(votes[max(0, k - n + 1):k + 1]) for k in range(len(votes))]
+        assert any(m != 0.5 and (m > 0.5) != o for m, o in zip(majority, votes, strict=True))
 
 
 def test_step_is_step_with_its_own_draws() -> None:
@@ -171,7 +187,7 @@ def test_step_is_step_with_its_own_draws() -> None:
         want = step_with(env, env.update_draws(k, params), state, a, params)
         jax.tree.map(lambda x, y: np.testing.assert_allclose(x, y, atol=1e-6), got, want)
         state = got[1]
-    assert bool(state.done) and int(state.partner.n_votes) == 1
+    assert bool(state.done) and int(state.partner.votes.n) == 1
 
 
 @jax.jit
@@ -191,7 +207,8 @@ def _draws(keys):
                 # from index 0 with the ego ending right: index 1, or 3 / 4 when it returns
                 "drift_next": drift.partner_update(jnp.asarray(0), jnp.asarray(1),
                                                    drift.update_draws(k, returns), returns),
-                "switch_mode": switch.reset_draws(k, None).mode}
+                "switch_mode": switch.reset_draws(k, None).mode,
+                "driving_right": Driving2D().reset_draws(k, None).right}
 
     return jax.vmap(one)(keys)
 
@@ -206,6 +223,7 @@ def test_the_partners_draws_have_the_references_distributions() -> None:
     assert abs(counts[1] - 0.7) < 0.03
     assert set(d["drift_index"].tolist()) == set(range(8))
     assert set(d["switch_mode"].tolist()) == {0, 1, 2}
+    assert abs(d["driving_right"].mean() - 0.5) < 0.03  # rng.choice([-1, 1])
 
 
 def test_rollout_vmaps_over_seeds_and_params_and_equals_single_runs() -> None:
@@ -264,6 +282,7 @@ def test_the_jax_switch_greedy_policy_earns_its_known_return() -> None:
     (lambda: PointMass().params(inside_turn="up"), "inside_turn='up' is invalid"),
     (lambda: InfluenceDrift().params(returns=2), "returns=2 is invalid"),
     (lambda: InfluenceSwitch().params(horizon=3), "horizon=3 is invalid; allowed: an integer >= 4"),
+    (lambda: Driving2D().params(history=0), "history=0 is invalid; allowed: an integer >= 1"),
     (lambda: make("lunar-lander"), "env 'lunar-lander' has no JAX version; allowed:"),
     (lambda: make("point-mass", sigma=0.2), r"env kwargs \['sigma'\] are not taken"),
     (lambda: PointMass().step(jax.random.PRNGKey(0), PointMass().reset(

@@ -21,7 +21,8 @@ interaction.
 ``step``'s ``info`` has a fixed structure (jit needs one): ``strategy`` (the strategy this step
 was played under, float32), ``strategy_id`` (-1 where the env has none), ``interaction``,
 ``t`` (steps taken in this interaction), ``outcome`` (what the partner reacts to; meaningful
-where ``done``), ``terminated``, ``truncated`` and ``active``. A step after the end of an
+where ``done``), ``terminated``, ``truncated``, ``active`` and, where the env defines success,
+``success`` (meaningful where ``done``). A step after the end of an
 interaction (the Gymnasium env raises there; under ``vmap`` over different horizons a fixed-
 length scan makes them) changes nothing: reward 0, ``done`` True, ``active``, ``terminated``
 and ``truncated`` False.
@@ -130,6 +131,11 @@ class JaxRepeatedEnv:
         """What the partner reacts to when the interaction ends in ``ego``."""
         raise NotImplementedError
 
+    def success(self, ego: Any, partner: Any, params: Any) -> jax.Array | None:
+        """Whether the interaction that ends in ``ego`` succeeded, or None where the env
+        defines no success (then ``info`` has no ``success`` key)."""
+        return None
+
     # -- the API -----------------------------------------------------------------------------
     def reset(self, key: jax.Array, params: Any) -> tuple[jax.Array, EnvState]:
         """Interaction 0 with a fresh partner whose first strategy is drawn from ``key``."""
@@ -188,5 +194,8 @@ class JaxRepeatedEnv:
                                         interaction=state.interaction, done=done), state)
         info.update(t=new.t, outcome=outcome, terminated=terminated & live,
                     truncated=truncated & live, active=live)
+        success = self.success(ego, state.partner, params)
+        if success is not None:
+            info["success"] = success
         reward = jnp.where(live, reward, 0.0).astype(jnp.float32)
         return self.observe(new.ego), new, reward, new.done, info

@@ -28,11 +28,12 @@ import numpy as np
 from flax import struct
 
 from lili.envs.jax.core import JaxRepeatedEnv
+from lili.envs.jax.partners import Votes, check_history, no_votes, push_vote
 from lili.envs.partners import check_partner_options
 from lili.envs.point_mass import BOUND, CENTER, INSIDE_TURNS, RADIUS, SPEED, STEP
 
 __all__ = ["PointMass", "PointMassParams", "CircleState", "ResetDraws", "UpdateDraws",
-           "N_ANGLES", "majority"]
+           "N_ANGLES"]
 
 # The first angle is STEP * k, k drawn from [0, N_ANGLES) (the reference's grid).
 N_ANGLES = int(2 * np.pi / STEP) + 1
@@ -50,11 +51,10 @@ class PointMassParams:
 
 @struct.dataclass
 class CircleState:
-    """The target's angle and the last outcomes (True: ended inside), most recent first."""
+    """The target's angle and the last outcomes (True: ended inside)."""
 
     theta: jax.Array
-    votes: jax.Array
-    n_votes: jax.Array
+    votes: Votes
 
 
 @struct.dataclass
@@ -65,18 +65,6 @@ class ResetDraws:
 @struct.dataclass
 class UpdateDraws:
     z: jax.Array  # standard normal; the step is STEP * (1 + step_noise * z)
-
-
-def majority(votes: jax.Array, n_votes: jax.Array, history: jax.Array) -> jax.Array:
-    """The majority of the last ``history`` of ``votes`` (bools, most recent first, ``n_votes``
-    of them valid); a tie goes to the most recent vote, as in
-    :class:`lili.envs.partners.MajorityHistory` (of two outcomes, the tied most recent one is
-    the last)."""
-    window = jnp.minimum(n_votes, history)
-    valid = jnp.arange(votes.shape[0]) < window
-    yes = jnp.sum(votes & valid)
-    no = window - yes
-    return jnp.where(yes == no, votes[0], yes > no)
 
 
 @dataclass(frozen=True)
@@ -93,9 +81,7 @@ class PointMass(JaxRepeatedEnv):
                inside_turn: str = "clockwise") -> PointMassParams:
         """Params from the Gymnasium env's keyword arguments, checked as it checks them."""
         check_partner_options(step_noise, history)
-        if history > self.max_history:
-            raise ValueError(f"history={history!r} is invalid; allowed: an integer from 1 to "
-                             f"max_history={self.max_history} (make PointMass(max_history=...))")
+        check_history(history, self.max_history, "PointMass")
         if isinstance(horizon, bool) or not isinstance(horizon, (int, np.integer)) \
                 or horizon < 1:
             raise ValueError(f"horizon={horizon!r} is invalid; allowed: an integer >= 1")
@@ -117,18 +103,15 @@ class PointMass(JaxRepeatedEnv):
 
     def partner_reset(self, draws: ResetDraws, params: PointMassParams) -> CircleState:
         return CircleState(theta=STEP * jnp.asarray(draws.index, jnp.float32),
-                           votes=jnp.zeros(self.max_history, bool),
-                           n_votes=jnp.asarray(0, jnp.int32))
+                           votes=no_votes(self.max_history))
 
     def partner_update(self, partner: CircleState, outcome: jax.Array, draws: UpdateDraws,
                        params: PointMassParams) -> CircleState:
-        votes = jnp.concatenate([jnp.asarray(outcome, bool)[None], partner.votes[:-1]])
-        n_votes = jnp.minimum(partner.n_votes + 1, self.max_history)
-        inside = majority(votes, n_votes, params.history)
+        votes, inside = push_vote(partner.votes, outcome, params.history)
         step = STEP + params.step_noise * STEP * draws.z
         sign = jnp.where(inside, params.inside_sign, -params.inside_sign)
         theta = jnp.mod(partner.theta + sign * step, 2 * jnp.pi)
-        return CircleState(theta=theta, votes=votes, n_votes=n_votes)
+        return CircleState(theta=theta, votes=votes)
 
     def target(self, partner: CircleState) -> jax.Array:
         return jnp.asarray(CENTER, jnp.float32) + RADIUS * jnp.stack(
