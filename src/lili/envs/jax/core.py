@@ -22,10 +22,14 @@ interaction.
 was played under, float32), ``strategy_id`` (-1 where the env has none), ``interaction``,
 ``t`` (steps taken in this interaction), ``outcome`` (what the partner reacts to; meaningful
 where ``done``), ``terminated``, ``truncated``, ``active`` and, where the env defines success,
-``success`` (meaningful where ``done``). A step after the end of an
-interaction (the Gymnasium env raises there; under ``vmap`` over different horizons a fixed-
-length scan makes them) changes nothing: reward 0, ``done`` True, ``active``, ``terminated``
-and ``truncated`` False.
+``success`` (meaningful where ``done``). A step after the end of an interaction (the Gymnasium
+env raises there; under ``vmap`` over different horizons a fixed-length scan makes them)
+changes nothing: reward 0, ``done`` True, ``active``, ``terminated`` and ``truncated`` False.
+
+The Oracle's observation (:class:`lili.envs.OracleObservation`) is ``obs`` with the strategy
+of the interaction appended: for a step's next observation that is the step's
+``info["strategy"]``, not ``info(state)`` of the returned state, which after the last step
+already holds the next strategy.
 
 The partner's randomness is isolated in *draws*: ``reset`` is ``reset_with(reset_draws(key,
 params), params)`` and ``step`` is ``step_with(update_draws(key, params), state, action,
