@@ -34,7 +34,9 @@ import lili
 from lili.agents import CheckpointError, load_agent
 from lili.agents.sac import SAC
 from lili.config import stored_agent_config
+from lili.errors import shown
 from lili.train import Stream, drawn_at_random
+from lili.yaml_bounds import safe_load, yaml_problem
 
 __all__ = ["RunLogger", "run_dir_for", "load_checkpoint", "METRIC_COLUMNS", "final_mean",
            "final_window", "latest_checkpoint", "read_run_config", "metric_columns",
@@ -134,12 +136,12 @@ def read_run_config(run_dir: str | Path) -> dict[str, Any]:
     if not path.is_file():
         raise ValueError(f"{Path(run_dir)} is not a run folder (config.yaml is missing)")
     try:
-        cfg = yaml.safe_load(path.read_text())
+        cfg = safe_load(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise ValueError(f"{path} is not UTF-8 text; restore it or start a new run") from None
     except yaml.YAMLError as e:
-        mark = getattr(e, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        raise ValueError(f"{path} is not valid YAML{where}; restore it or start a new run") \
-            from None
+        raise ValueError(f"{path} is not valid YAML ({yaml_problem(e)}); restore it or start "
+                         "a new run") from None
     keys = ("env", "env_kwargs", "algo", "seed", "interactions", "agent")
     if not isinstance(cfg, dict) or any(k not in cfg for k in keys):
         raise ValueError(f"{path} is not a lili run config (it must map {', '.join(keys)})")
@@ -195,12 +197,15 @@ def load_checkpoint(run_dir: str | Path, agent: SAC, stream: Stream) -> int:
 
 def _read_rows(path: Path, columns: list[str]) -> list[list[str]]:
     try:
-        with path.open(newline="") as f:
+        with path.open(newline="", encoding="utf-8") as f:
             rows = list(csv.reader(f))
     except OSError as e:
-        raise CheckpointError(f"{path} cannot be read: {e}") from None
+        raise CheckpointError(f"{path} cannot be read: {e.strerror}") from None
+    except UnicodeDecodeError as e:
+        raise CheckpointError(f"{path} is not UTF-8 text (byte {e.start}); restore the file or "
+                              "start a new run") from None
     if not rows or rows[0] != columns:
-        got = rows[0] if rows else "nothing"
+        got = shown(rows[0]) if rows else "nothing"
         raise CheckpointError(f"{path} has columns {got}; expected {columns} (was it edited?)")
     return rows[1:]
 

@@ -13,6 +13,7 @@ from lili.experiments.plan import RunSpec, plan, run_status
 from lili.experiments.presets import get_preset
 from lili.experiments.progress import SweepProgress
 from lili.experiments.runner import log_path, rows_logged, write_agent_configs
+from lili.limits import MAX_JOBS, check_count
 from lili.runs import check_out_dir
 
 __all__ = ["reproduce", "LOCAL_JOBS"]
@@ -27,6 +28,10 @@ def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: 
     estimates = {s: estimate_seconds(s, rows_logged(s) if status[s] == "resume" else 0)
                  for s in todo}
     seconds = sum(estimates.values())
+    # Wall time: the runs spread over the jobs, but no faster than the longest run, and no
+    # more jobs at work than runs to do.
+    parallel = max(1, min(jobs, len(todo)))
+    wall = max([seconds / parallel, *estimates.values()])
     for s in specs:
         say(f"{status[s]:6}  {s.run_dir}  ({s.interactions} interactions"
             + (f", {s.env_kwargs}" if s.env_kwargs else "")
@@ -42,7 +47,7 @@ def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: 
         say(f"  {preset}: {sec / 3600:.1f} CPU-hours ("
             + ", ".join(f"{a} {v / 3600:.1f}" for v, a in algos) + ")")
     say(f"{name}: {len(specs)} runs ({len(todo)} to run, {len(specs) - len(todo)} done); "
-        f"estimated {seconds / 3600:.1f} CPU-hours, about {seconds / 3600 / jobs:.1f} h of "
+        f"estimated {seconds / 3600:.1f} CPU-hours, about {wall / 3600:.1f} h of "
         f"wall time with {jobs} jobs (from measured per-run costs, lili.experiments.costs)")
     return {"runs": len(specs), "to_run": len(todo), "cpu_hours": seconds / 3600,
             "by_preset": {k: v / 3600 for k, v in by_preset.items()}}
@@ -83,8 +88,8 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     after the others have finished.
     """
     preset = get_preset(name)
-    if jobs is not None and (isinstance(jobs, bool) or jobs < 1):
-        raise ValueError(f"--jobs {jobs} is invalid; allowed: an integer >= 1")
+    if jobs is not None:
+        check_count(jobs, "--jobs", MAX_JOBS)
     out = Path(out)
     check_out_dir(out)
     specs = plan(preset, out, seeds=seeds, interactions=interactions, algos=algos, quick=quick,
