@@ -221,9 +221,9 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
-    from lili.agents import load_agent
+    from lili.config import AgentConfig
     from lili.evaluate import evaluate
-    from lili.runs import latest_checkpoint, read_run_config
+    from lili.runs import latest_checkpoint, load_run_agent, read_run_config
 
     _check_interactions(args.interactions)
     _check_seed(args.seed)
@@ -236,7 +236,11 @@ def cmd_eval(args: argparse.Namespace) -> int:
     ck, _ = latest_checkpoint(run_dir)
     env = _make_env(cfg["env"], cfg.get("env_kwargs", {}),
                     "rgb_array" if args.video else None)
-    agent = load_agent(ck / "agent.msgpack", env)
+    try:
+        stored = AgentConfig.from_dict(cfg["agent"])
+    except (TypeError, ValueError) as e:
+        raise UsageError(f"{run_dir / 'config.yaml'}: agent: {e}") from None
+    agent = load_run_agent(ck, run_dir, env, cfg["algo"], stored)
     frames: list | None = [] if args.video else None
     res = evaluate(agent, LabelledFrames(env) if args.video else None, args.interactions,
                    seed=args.seed, frames=frames)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import reprlib
 from typing import Any
 
-__all__ = ["shown", "bounded", "MAX_LINE_CHARS", "MAX_VALUE_CHARS"]
+__all__ = ["shown", "bounded", "flat", "MAX_LINE_CHARS", "MAX_VALUE_CHARS"]
 
 MAX_LINE_CHARS = 300
 """Longest error line printed (``lili: error: `` included)."""
@@ -52,3 +52,9 @@ def bounded(message: str, limit: int = MAX_LINE_CHARS) -> str:
     if len(lines) > MAX_LINES:
         lines = lines[:MAX_LINES - 1] + [f"... ({len(lines) - MAX_LINES + 1} more lines)"]
     return "\n".join(_cut(line, limit) for line in lines)
+
+
+def flat(text: str, limit: int = MAX_LINE_CHARS // 2) -> str:
+    """``text`` (another library's message, maybe several lines) as one line of at most
+    ``limit`` characters."""
+    return _cut(" ".join(text[:100 * limit].split()), limit)

@@ -63,6 +63,22 @@ def _make_backend(ray: str | None, jobs: int | None, out: Path):
     return RayBackend(None if ray == RAY_LOCAL else ray, jobs, out)
 
 
+def _start_backend(ray: str | None, jobs: int | None, out: Path):
+    """The backend, with ``out`` created for it; when it cannot start, the folders this made
+    are removed again (a refused cluster leaves no empty ``--out``)."""
+    missing = [p for p in (out, *out.parents) if not p.exists()]
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        return _make_backend(ray, jobs, out)
+    except BaseException:
+        for folder in missing:  # deepest first; only while empty
+            try:
+                folder.rmdir()
+            except OSError:
+                break
+        raise
+
+
 def _check_ray_importable() -> None:
     from lili.experiments.ray_backend import _import_ray
 
@@ -92,6 +108,10 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
         check_count(jobs, "--jobs", MAX_JOBS)
     out = Path(out)
     check_out_dir(out)
+    if ray is not None and ray != RAY_LOCAL:
+        from lili.experiments.ray_backend import check_address
+
+        check_address(ray)
     specs = plan(preset, out, seeds=seeds, interactions=interactions, algos=algos, quick=quick,
                  overrides=overrides, envs=envs, env_kwargs=env_kwargs)
     status = {s: run_status(s) for s in specs}
@@ -107,8 +127,7 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     todo = [s for s in specs if status[s] != "done"]
     t0 = time.time()
     if todo:
-        out.mkdir(parents=True, exist_ok=True)
-        backend = _make_backend(ray, jobs, out)
+        backend = _start_backend(ray, jobs, out)
         say(f"{name}: {len(specs)} runs, {len(specs) - len(todo)} done, {len(todo)} to run on "
             f"{backend.description}")
         failed = _run_all(backend, todo, len(specs) - len(todo), progress)
