@@ -385,6 +385,11 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _echo(text: str) -> str:
+    """A command-line word as typed, or bounded (:func:`lili.errors.shown`) when long."""
+    return text if len(text) <= 40 else shown(text)
+
+
 def _unknown_arguments(parser: argparse.ArgumentParser, command: str,
                        extra: list[str]) -> NoReturn:
     """Exit 2 naming the arguments ``lili COMMAND`` does not take and the flags it does (the
@@ -393,7 +398,8 @@ def _unknown_arguments(parser: argparse.ArgumentParser, command: str,
                if isinstance(a, argparse._SubParsersAction)).choices[command]
     flags = [o for a in sub._actions for o in a.option_strings
              if o.startswith("--") and o != "--help"]
-    sub.error(f"unrecognized arguments: {' '.join(extra)}; allowed flags of {sub.prog}: "
+    sub.error(f"unrecognized arguments: {' '.join(map(_echo, extra))}; allowed flags of "
+              f"{sub.prog}: "
               + ", ".join(flags))
 
 

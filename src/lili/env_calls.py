@@ -32,8 +32,10 @@ def where(interaction: int | None, step: int | None = None) -> str:
 
 
 def _name(env: gym.Env) -> str:
+    """The registered id, else ``module:Class`` (the spec ``lili train`` takes)."""
     spec = getattr(env, "spec", None)
-    return getattr(spec, "id", None) or type(getattr(env, "unwrapped", env)).__name__
+    cls = type(getattr(env, "unwrapped", env))
+    return getattr(spec, "id", None) or f"{cls.__module__}:{cls.__qualname__}"
 
 
 def _failed(env: gym.Env, at: str, what: str) -> EnvError:

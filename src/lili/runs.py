@@ -183,8 +183,8 @@ def load_run_agent(ck: Path, run_dir: str | Path, env: Any, algo: str,
     eval``)."""
     loaded = load_agent(ck / "agent.msgpack", env)
     if loaded.algo != algo:
-        raise CheckpointError(f"{ck} holds a {loaded.algo!r} agent; the run in {run_dir} is "
-                              f"{algo!r} (its config.yaml)")
+        raise CheckpointError(f"{ck} holds a {loaded.algo!r} agent; this run is {algo!r} (its "
+                              "config.yaml)")
     if loaded.config != config:
         raise CheckpointError(f"{ck} was trained with another agent config than {run_dir}")
     return loaded
