@@ -220,9 +220,7 @@ def test_hostile_input_one_short_line_exit_2_nothing_written(
     argv = [str(tmp_path / "base") if a == "OUT" else a for a in argv]
     before = _snapshot(tmp_path)
     capsys.readouterr()
-    t0 = time.perf_counter()
     code = cli.main(argv)
-    seconds = time.perf_counter() - t0
     err = capsys.readouterr().err
     assert code == 2, err[:1000]
     lines = err.strip().splitlines()
@@ -231,7 +229,6 @@ def test_hostile_input_one_short_line_exit_2_nothing_written(
     for fragment in fragments:
         assert fragment in err, (fragment, err)
     assert _snapshot(tmp_path) == before
-    assert seconds < 30, seconds
 
 
 SMALL_SAC = "warmup_interactions: 2\nhidden: [8]\nbatch_interactions: 2\nper_interaction: 2\n"
@@ -346,6 +343,9 @@ def test_a_callback_returning_false_stops_training() -> None:
     assert seen == [0, 1, 2] and len(rows) == 3 and stream.count == 3
     rows = train(agent, stream, 2, callback=lambda row: None)
     assert stream.count == 5
+    # The same through the facade's learn().
+    agent.learn(10, callback=lambda row: row["interaction"] < 6)
+    assert agent.stream.count == 7
 
 
 def test_strategies_are_named_by_the_env() -> None:

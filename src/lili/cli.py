@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -293,7 +294,13 @@ def cmd_check_env(args: argparse.Namespace) -> int:
                          f"[2, {MAX_INTERACTIONS}]")
     _check_seed(args.seed)
     factory = load_env_class(args.env)
-    check_env(factory, n_interactions=args.interactions, seed=args.seed)
+    # Gymnasium's warnings on the way (an observation outside its space, ...) are shown only
+    # when the check passes: a failure is its one line, which says more.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(factory, n_interactions=args.interactions, seed=args.seed)
+    for w in caught:
+        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     print(f"{args.env}: passes Gymnasium's checker and the repeated-interaction contract")
     return 0
 

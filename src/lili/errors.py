@@ -13,8 +13,10 @@ from typing import Any
 
 __all__ = ["shown", "bounded", "flat", "MAX_LINE_CHARS", "MAX_VALUE_CHARS"]
 
-MAX_LINE_CHARS = 300
-"""Longest error line printed (``lili: error: `` included)."""
+MAX_LINE_CHARS = 600
+"""Longest error line printed (``lili: error: `` included): room for the longest message
+the library means to print (the list of every AgentConfig field), never the size of what a
+user typed."""
 MAX_VALUE_CHARS = 60
 """About the longest echo of one value inside a message."""
 MAX_LINES = 12
