@@ -37,7 +37,7 @@ from lili.agents.sac import SAC
 from lili.config import AgentConfig, stored_agent_config
 from lili.errors import shown
 from lili.train import Stream, drawn_at_random
-from lili.yaml_bounds import safe_load, yaml_problem
+from lili.yaml_bounds import YAMLTooLarge, safe_load
 
 __all__ = ["RunLogger", "run_dir_for", "load_checkpoint", "METRIC_COLUMNS", "final_mean",
            "final_window", "latest_checkpoint", "read_run_config", "metric_columns",
@@ -144,9 +144,13 @@ def read_run_config(run_dir: str | Path) -> dict[str, Any]:
         cfg = safe_load(path.read_text(encoding="utf-8"))
     except UnicodeDecodeError:
         raise ValueError(f"{path} is not UTF-8 text; restore it or start a new run") from None
+    except YAMLTooLarge as e:
+        raise ValueError(f"{path} is refused: {e}; restore it or start a new run") from None
     except yaml.YAMLError as e:
-        raise ValueError(f"{path} is not valid YAML ({yaml_problem(e)}); restore it or start "
-                         "a new run") from None
+        mark = getattr(e, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        raise ValueError(f"{path} is not valid YAML{where}; restore it or start a new run") \
+            from None
     keys = ("env", "env_kwargs", "algo", "seed", "interactions", "agent")
     if not isinstance(cfg, dict) or any(k not in cfg for k in keys):
         raise ValueError(f"{path} is not a lili run config (it must map {', '.join(keys)})")

@@ -24,7 +24,7 @@ import yaml
 
 from lili.errors import shown
 from lili.report.style import algo_sort_key
-from lili.yaml_bounds import safe_load, yaml_problem
+from lili.yaml_bounds import YAMLTooLarge, safe_load, yaml_problem
 
 __all__ = ["Run", "load_run", "find_runs", "METRICS_FILE", "CONFIG_FILE"]
 
@@ -259,6 +259,8 @@ def _read_config(path: Path) -> dict[str, Any]:
     except UnicodeDecodeError:
         raise ValueError(f"{path}: config is not UTF-8 text; allowed: the YAML `lili train` "
                          "writes") from None
+    except YAMLTooLarge as exc:
+        raise ValueError(f"{path}: config is refused: {exc}") from None
     except yaml.YAMLError as exc:
         raise ValueError(f"{path}: config is not valid YAML ({yaml_problem(exc)})") from None
     if not isinstance(config, dict):
