@@ -72,12 +72,13 @@ def _check_config_size(path: str) -> None:
         return
     try:
         with p.open("rb") as f:
-            raw = f.read(MAX_YAML_CHARS * 4 + 1)
-        text = raw.decode("utf-8")
+            raw = f.read(MAX_YAML_CHARS * 4 + 1)  # UTF-8: at most 4 bytes a character
+        if len(raw) > MAX_YAML_CHARS * 4:
+            raise YAMLTooLarge(f"it is more than {MAX_YAML_CHARS} characters long; allowed: "
+                               f"at most {MAX_YAML_CHARS}")
+        check_yaml(raw.decode("utf-8"))
     except (OSError, UnicodeDecodeError):
         return
-    try:
-        check_yaml(text)
     except YAMLTooLarge as e:
         raise UsageError(f"config file {shown(path)} is refused: {e}") from None
 
