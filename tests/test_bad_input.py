@@ -16,6 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from _env_modules import importable
 
 from lili import cli
 from lili.config import AgentConfig, load_config
@@ -71,12 +72,8 @@ def trained_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def bad_envs(tmp_path_factory: pytest.TempPathFactory) -> str:
-    folder = tmp_path_factory.mktemp("envs")
-    (folder / "lili_bad_envs.py").write_text(BAD_ENVS)
-    sys.path.insert(0, str(folder))
-    yield "lili_bad_envs"
-    sys.path.remove(str(folder))
-    sys.modules.pop("lili_bad_envs", None)
+    with importable(tmp_path_factory.mktemp("envs"), "lili_bad_envs", BAD_ENVS):
+        yield "lili_bad_envs"
 
 
 def _snapshot(root: Path) -> dict[str, str]:
@@ -169,7 +166,7 @@ CASES = [
     ("--video x.mp4", lambda tmp, run: _eval("--video", str(tmp / "x.mp4"))(tmp, run),
      ["x.mp4", "allowed: a .gif file"]),
     ("check-env, NaN observation after interaction 30", _check_env("NaNAfter30"),
-     ["interaction 30", "not finite", "finite observations"]),
+     ["interaction 30", "not finite", "NaN in dimension(s) [0, 1]", "finite observations"]),
     ("check-env, observation = 2 x strategy", _check_env("Leak2x"),
      ["observation dimension 2", "2 * strategy[0]", "leaks"]),
     # a hostile tester's own

@@ -232,7 +232,7 @@ def _snapshot(root: Path) -> dict[str, bytes]:
 
 @pytest.mark.parametrize(("argv", "message"), [
     (["nope"], "unknown preset 'nope'; allowed: point-mass, noise"),
-    (["point-mass", "--jobs", "0"], "--jobs 0 is invalid; allowed: an integer >= 1"),
+    (["point-mass", "--jobs", "0"], "--jobs 0 is invalid; allowed: an integer in [1, 1024]"),
     (["point-mass", "--seeds", "0"], "--seeds 0 is invalid"),
     (["point-mass", "--interactions", "-1"], "--interactions -1 is invalid"),
     (["air-hockey", "--algos", "slac"], "--algos slac is not in preset 'air-hockey'; allowed"),

@@ -9,8 +9,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from pathlib import Path
 from typing import Any, NoReturn
+
+from lili.errors import bounded, shown
 
 __all__ = ["main"]
 
@@ -23,34 +26,61 @@ class _Parser(argparse.ArgumentParser):
     """argparse with its errors on one line (by default it prints the usage block first)."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"lili: error: {message} (see {self.prog} --help)\n")
+        self.exit(2, bounded(f"lili: error: {message} (see {self.prog} --help)") + "\n")
 
 
 def _parse_kwargs(items: list[str], flag: str = "--env-kwarg") -> dict[str, Any]:
-    """``--env-kwarg KEY=VALUE`` items as a dict; VALUE is YAML (0.2, 1e-3, true, [1, 2]).
+    """``--env-kwarg KEY=VALUE`` items as a dict; VALUE is YAML (0.2, 1e-3, true, [1, 2]) of
+    bounded size (:mod:`lili.yaml_bounds`: at most 10,000 characters and 10,000 values).
 
     ``render_mode`` is refused: ``lili train`` renders nothing, and ``lili eval --video`` sets
     ``rgb_array`` itself.
     """
+    import yaml
+
     from lili.config import yaml_value
+    from lili.yaml_bounds import MAX_VALUE_CHARS, check_yaml
 
     out: dict[str, Any] = {}
     for item in items:
         key, sep, text = item.partition("=")
         key = key.strip()
         if not sep or not key:
-            raise UsageError(f"{flag} {item!r} is invalid; allowed: KEY=VALUE")
+            raise UsageError(f"{flag} {shown(item)} is invalid; allowed: KEY=VALUE")
         if key in out:
-            raise UsageError(f"{flag} {key} is given twice ({key}={out[key]!r}, {item}); "
-                             "allowed: each KEY once")
+            raise UsageError(f"{flag} {key} is given twice ({key}={shown(out[key])}, "
+                             f"{key}={shown(text)}); allowed: each KEY once")
         if key == "render_mode" and flag == "--env-kwarg":
-            raise UsageError(f"--env-kwarg {item} is not allowed: lili train renders nothing "
-                             "(lili eval --video records frames with render_mode='rgb_array')")
+            raise UsageError(f"--env-kwarg render_mode={text} is not allowed: lili train "
+                             "renders nothing (lili eval --video records frames with "
+                             "render_mode='rgb_array')")
         try:
+            check_yaml(text, MAX_VALUE_CHARS)
             out[key] = yaml_value(text)
-        except ValueError as e:
-            raise UsageError(f"{flag} {item!r} is invalid: {e}") from None
+        except (ValueError, yaml.YAMLError) as e:
+            raise UsageError(f"{flag} {shown(item)} is invalid: {e}") from None
     return out
+
+
+def _check_config_size(path: str) -> None:
+    """Refuse a ``--config`` file past the bounds of :mod:`lili.yaml_bounds` before it is
+    loaded; every other problem of the file is ``load_config``'s to name."""
+    from lili.yaml_bounds import MAX_YAML_CHARS, YAMLTooLarge, check_yaml
+
+    p = Path(path)
+    if not p.is_file():
+        return
+    try:
+        with p.open("rb") as f:
+            raw = f.read(MAX_YAML_CHARS * 4 + 1)  # UTF-8: at most 4 bytes a character
+        if len(raw) > MAX_YAML_CHARS * 4:
+            raise YAMLTooLarge(f"it is more than {MAX_YAML_CHARS} characters long; allowed: "
+                               f"at most {MAX_YAML_CHARS}")
+        check_yaml(raw.decode("utf-8"))
+    except (OSError, UnicodeDecodeError):
+        return
+    except YAMLTooLarge as e:
+        raise UsageError(f"config file {shown(path)} is refused: {e}") from None
 
 
 def parse_overrides(items: list[str], flag: str = "--set") -> dict[str, Any]:
@@ -64,6 +94,15 @@ def parse_overrides(items: list[str], flag: str = "--set") -> dict[str, Any]:
     except ValueError as e:
         raise UsageError(f"{flag}: {e}") from None
     return out
+
+
+def _check_interactions(n: int, flag: str = "--interactions") -> int:
+    from lili.limits import MAX_INTERACTIONS, check_count
+
+    try:
+        return check_count(n, flag, MAX_INTERACTIONS)
+    except ValueError as e:
+        raise UsageError(str(e)) from None
 
 
 def _check_seed(seed: int, flag: str = "--seed") -> int:
@@ -116,12 +155,13 @@ def cmd_train(args: argparse.Namespace) -> int:
     env_id = _resolve_env(args.env)
     if args.algo not in ALGOS:
         raise UsageError(f"unknown algo {args.algo!r}; allowed: {', '.join(ALGOS)}")
-    if args.interactions < 1:
-        raise UsageError(f"--interactions {args.interactions} is invalid; allowed: an integer >= 1")
+    _check_interactions(args.interactions)
     _check_seed(args.seed)
     from lili.runs import check_out_dir
 
     check_out_dir(args.out, "--out")
+    if args.config:
+        _check_config_size(args.config)
     config = load_config(args.config) if args.config else AgentConfig()
     check_extra(config)
     env_kwargs = _parse_kwargs(args.env_kwarg)
@@ -183,12 +223,11 @@ def cmd_train(args: argparse.Namespace) -> int:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
-    from lili.agents import load_agent
+    from lili.config import AgentConfig
     from lili.evaluate import evaluate
-    from lili.runs import latest_checkpoint, read_run_config
+    from lili.runs import latest_checkpoint, load_run_agent, read_run_config
 
-    if args.interactions < 1:
-        raise UsageError(f"--interactions {args.interactions} is invalid; allowed: an integer >= 1")
+    _check_interactions(args.interactions)
     _check_seed(args.seed)
     if args.video:
         from lili.video import LabelledFrames, check_video_path
@@ -199,7 +238,11 @@ def cmd_eval(args: argparse.Namespace) -> int:
     ck, _ = latest_checkpoint(run_dir)
     env = _make_env(cfg["env"], cfg.get("env_kwargs", {}),
                     "rgb_array" if args.video else None)
-    agent = load_agent(ck / "agent.msgpack", env)
+    try:
+        stored = AgentConfig.from_dict(cfg["agent"])
+    except (TypeError, ValueError) as e:
+        raise UsageError(f"{run_dir / 'config.yaml'}: agent: {e}") from None
+    agent = load_run_agent(ck, run_dir, env, cfg["algo"], stored)
     frames: list | None = [] if args.video else None
     res = evaluate(agent, LabelledFrames(env) if args.video else None, args.interactions,
                    seed=args.seed, frames=frames)
@@ -261,7 +304,13 @@ def cmd_check_env(args: argparse.Namespace) -> int:
                          f"[2, {MAX_INTERACTIONS}]")
     _check_seed(args.seed)
     factory = load_env_class(args.env)
-    check_env(factory, n_interactions=args.interactions, seed=args.seed)
+    # Gymnasium's warnings on the way (an observation outside its space, ...) are shown only
+    # when the check passes: a failure is its one line, which says more.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(factory, n_interactions=args.interactions, seed=args.seed)
+    for w in caught:
+        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     print(f"{args.env}: passes Gymnasium's checker and the repeated-interaction contract")
     return 0
 
@@ -369,17 +418,37 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _echo(text: str) -> str:
+    """A command-line word as typed, or bounded (:func:`lili.errors.shown`) when long."""
+    return text if len(text) <= 40 else shown(text)
+
+
+def _unknown_arguments(parser: argparse.ArgumentParser, command: str,
+                       extra: list[str]) -> NoReturn:
+    """Exit 2 naming the arguments ``lili COMMAND`` does not take and the flags it does (the
+    top-level parser would point at ``lili --help``)."""
+    sub = next(a for a in parser._actions
+               if isinstance(a, argparse._SubParsersAction)).choices[command]
+    flags = [o for a in sub._actions for o in a.option_strings
+             if o.startswith("--") and o != "--help"]
+    sub.error(f"unrecognized arguments: {' '.join(map(_echo, extra))}; allowed flags of "
+              f"{sub.prog}: "
+              + ", ".join(flags))
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``lili`` command."""
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:
+            _unknown_arguments(parser, args.command, extra)
     except SystemExit as e:  # argparse's one-line errors (exit 2) and --help (exit 0)
         return e.code if isinstance(e.code, int) else 2
     try:
         return int(args.func(args))
     except (ValueError, OSError) as e:  # UsageError, CheckpointError, EnvContractError, I/O
-        print(f"lili: error: {e}", file=sys.stderr)
+        print(bounded(f"lili: error: {e}"), file=sys.stderr)
         return 2
 
 

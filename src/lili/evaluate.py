@@ -10,6 +10,7 @@ import numpy as np
 
 from lili.agents.base import Agent, check_seed
 from lili.buffer import InteractionBuffer
+from lili.env_calls import env_reset, where
 from lili.train import Interaction, rollout
 
 __all__ = ["evaluate", "Episodes"]
@@ -34,7 +35,7 @@ class Episodes:
         self.buffer = InteractionBuffer(max(2, agent.history + 1), agent.horizon, agent.obs_dim,
                                         agent.act_dim)
         self.key = jax.random.PRNGKey(seed if key_seed is None else key_seed)
-        self.obs, self.info = self.env.reset(seed=seed)
+        self.obs, self.info = env_reset(self.env, where(0), seed=seed)
         self.acting = agent.initial_state()
         self.index = 0
 
@@ -48,8 +49,8 @@ class Episodes:
             return agent.act(o, s, k, self.deterministic)
 
         done = rollout(self.env, self.obs, self.info, act, self.acting, agent.scale_action,
-                       agent.horizon)
-        self.obs, self.info = self.env.reset()
+                       agent.horizon, self.index)
+        self.obs, self.info = env_reset(self.env, where(self.index + 1))
         self.buffer.add(done["traj"], self.obs)
         self.acting = agent.next_state(self.buffer)
         self.index += 1

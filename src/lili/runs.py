@@ -2,7 +2,8 @@
 
 - ``config.yaml``: the resolved configuration (env id and kwargs, algo, seed, budget, agent).
 - ``metrics.csv``: one row per interaction (return, length, success, strategy, losses, time).
-- ``tb/``: TensorBoard event files (tensorboardX).
+- ``tb/``: TensorBoard event files (tensorboardX): the numbers of ``metrics.csv``, written
+  anew from it when a run resumes.
 - ``checkpoints/``: the newest checkpoint ``ckpt_<n>/``, in two parts written apart: the agent
   (``agent.msgpack``: parameters, optimiser states, normaliser, config) and the stream
   (``stream.npz``: replay buffer, action log, wall time), plus ``latest.json`` pointing at it;
@@ -20,10 +21,10 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
 import platform
 import shutil
 import subprocess
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -33,12 +34,14 @@ import yaml
 import lili
 from lili.agents import CheckpointError, load_agent
 from lili.agents.sac import SAC
-from lili.config import stored_agent_config
+from lili.config import AgentConfig, stored_agent_config
+from lili.errors import shown
 from lili.train import Stream, drawn_at_random
+from lili.yaml_bounds import YAMLTooLarge, safe_load
 
 __all__ = ["RunLogger", "run_dir_for", "load_checkpoint", "METRIC_COLUMNS", "final_mean",
            "final_window", "latest_checkpoint", "read_run_config", "metric_columns",
-           "resume_run", "check_out_dir"]
+           "resume_run", "check_out_dir", "load_run_agent"]
 
 METRIC_COLUMNS = ("critic_loss", "actor_loss", "alpha", "rep_loss", "q", "entropy")
 
@@ -53,9 +56,13 @@ def check_out_dir(path: str | Path, flag: str = "--out") -> Path:
             if not folder.is_dir():
                 raise ValueError(f"{flag} {str(path)!r} is invalid: {str(folder)!r} is a file; "
                                  "allowed: a folder, existing or to be created")
-            if not os.access(folder, os.W_OK | os.X_OK):
+            # Tried, not asked (os.access): root may "access" /sys, where mkdir still fails.
+            try:
+                Path(tempfile.mkdtemp(prefix=".lili-probe-", dir=folder)).rmdir()
+            except OSError as e:
                 raise ValueError(f"{flag} {str(path)!r} is invalid: {str(folder)!r} is not "
-                                 "writable; allowed: a folder you can write to")
+                                 f"writable ({e.strerror}); allowed: a folder you can write "
+                                 "to") from None
             break
     return p
 
@@ -134,7 +141,11 @@ def read_run_config(run_dir: str | Path) -> dict[str, Any]:
     if not path.is_file():
         raise ValueError(f"{Path(run_dir)} is not a run folder (config.yaml is missing)")
     try:
-        cfg = yaml.safe_load(path.read_text())
+        cfg = safe_load(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise ValueError(f"{path} is not UTF-8 text; restore it or start a new run") from None
+    except YAMLTooLarge as e:
+        raise ValueError(f"{path} is refused: {e}; restore it or start a new run") from None
     except yaml.YAMLError as e:
         mark = getattr(e, "problem_mark", None)
         where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
@@ -169,15 +180,25 @@ def latest_checkpoint(run_dir: str | Path) -> tuple[Path, int]:
     return ck, n
 
 
+def load_run_agent(ck: Path, run_dir: str | Path, env: Any, algo: str,
+                   config: AgentConfig) -> SAC:
+    """The agent of checkpoint ``ck`` on ``env``; CheckpointError unless it is the run's
+    ``algo`` with the run's agent ``config`` (the one check of ``--resume`` and ``lili
+    eval``)."""
+    loaded = load_agent(ck / "agent.msgpack", env)
+    if loaded.algo != algo:
+        raise CheckpointError(f"{ck} holds a {loaded.algo!r} agent; this run is {algo!r} (its "
+                              "config.yaml)")
+    if loaded.config != config:
+        raise CheckpointError(f"{ck} was trained with another agent config than {run_dir}")
+    return loaded
+
+
 def load_checkpoint(run_dir: str | Path, agent: SAC, stream: Stream) -> int:
     """Restore ``agent``'s state and ``stream`` from the run's latest checkpoint; return the
     number of interactions it holds. CheckpointError naming the file on any mismatch."""
     ck, n = latest_checkpoint(run_dir)
-    loaded = load_agent(ck / "agent.msgpack", agent.env)
-    if loaded.algo != agent.algo:
-        raise CheckpointError(f"{ck} holds a {loaded.algo!r} agent; this run is {agent.algo!r}")
-    if loaded.config != agent.config:
-        raise CheckpointError(f"{ck} was trained with another agent config than {run_dir}")
+    loaded = load_run_agent(ck, run_dir, agent.env, agent.algo, agent.config)
     try:
         with np.load(ck / "stream.npz", allow_pickle=False) as d:
             parts = dict(d)
@@ -195,12 +216,15 @@ def load_checkpoint(run_dir: str | Path, agent: SAC, stream: Stream) -> int:
 
 def _read_rows(path: Path, columns: list[str]) -> list[list[str]]:
     try:
-        with path.open(newline="") as f:
+        with path.open(newline="", encoding="utf-8") as f:
             rows = list(csv.reader(f))
     except OSError as e:
-        raise CheckpointError(f"{path} cannot be read: {e}") from None
+        raise CheckpointError(f"{path} cannot be read: {e.strerror}") from None
+    except UnicodeDecodeError as e:
+        raise CheckpointError(f"{path} is not UTF-8 text (byte {e.start}); restore the file or "
+                              "start a new run") from None
     if not rows or rows[0] != columns:
-        got = rows[0] if rows else "nothing"
+        got = shown(rows[0]) if rows else "nothing"
         raise CheckpointError(f"{path} has columns {got}; expected {columns} (was it edited?)")
     return rows[1:]
 
@@ -267,12 +291,31 @@ class RunLogger:
         self._csv = csv.writer(self._csv_file)
         from tensorboardX import SummaryWriter
 
-        # purge_step drops events a killed run wrote after its last checkpoint.
-        self.tb = SummaryWriter(str(self.dir / "tb"), purge_step=start if start > 0 else None)
-        self.returns = [float(r[1]) for r in rows]
+        # TensorBoard holds what metrics.csv holds: a resumed run's old event files go (a run
+        # killed after its last checkpoint, or before its first, wrote events that the resumed
+        # run writes again) and the rows kept are written anew, at 6 digits as in the CSV.
+        for old in (self.dir / "tb").glob("events.out.tfevents.*"):
+            old.unlink()
+        self.tb = SummaryWriter(str(self.dir / "tb"))
         success = self.columns.index("success")
-        # One cell per interaction (NaN where the env reports none), aligned with the returns.
-        self.successes = [float(r[success]) if r[success] != "" else math.nan for r in rows]
+        self.returns, self.successes = [], []
+        for r in rows:
+            cells = dict(zip(self.columns, r, strict=False))
+            self._record(int(r[0]), float(r[1]),
+                         None if r[success] == "" else float(r[success]),
+                         {k: float(cells[k]) for k in METRIC_COLUMNS if cells.get(k, "") != ""})
+
+    def _record(self, i: int, ret: float, success: float | bool | None,
+                metrics: dict[str, float]) -> None:
+        """Interaction ``i``'s return, success and losses into the in-memory lists (one success
+        cell per interaction, NaN where the env reports none) and TensorBoard."""
+        self.returns.append(ret)
+        self.tb.add_scalar("interaction/return", ret, i)
+        self.successes.append(math.nan if success is None else float(success))
+        if success is not None:
+            self.tb.add_scalar("interaction/success", float(success), i)
+        for k, v in metrics.items():
+            self.tb.add_scalar(f"train/{k}", v, i)
 
     def log(self, row: dict[str, Any], agent: SAC, stream: Stream) -> None:
         """Append one interaction's row; checkpoint every ``checkpoint_every`` interactions."""
@@ -288,14 +331,7 @@ class RunLogger:
         values += [f"{row['wall_time']:.3f}"]
         self._csv.writerow(values)
         self._csv_file.flush()
-        self.returns.append(row["return"])
-        self.tb.add_scalar("interaction/return", row["return"], i)
-        self.successes.append(math.nan if success is None else float(success))
-        if success is not None:
-            self.tb.add_scalar("interaction/success", float(success), i)
-        for k in METRIC_COLUMNS:
-            if k in row:
-                self.tb.add_scalar(f"train/{k}", row[k], i)
+        self._record(i, row["return"], success, {k: row[k] for k in METRIC_COLUMNS if k in row})
         if (i + 1) % self.checkpoint_every == 0:
             self.checkpoint(agent, stream)
 

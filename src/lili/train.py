@@ -23,6 +23,7 @@ import numpy as np
 
 from lili.agents.base import ActingState, Agent, CheckpointError
 from lili.buffer import InteractionBuffer
+from lili.env_calls import env_reset, env_step, where
 
 __all__ = ["train", "rollout", "Interaction", "Stream", "NonFiniteError", "interaction_keys",
            "plays_at_random", "drawn_at_random"]
@@ -47,11 +48,13 @@ def rollout(
     acting: ActingState,
     to_env: Callable[[np.ndarray], np.ndarray],
     horizon: int,
+    index: int | None = None,
 ) -> Interaction:
     """Play one interaction from its first observation.
 
     ``act(obs, acting)`` returns an action in [-1, 1] and the next acting state, which is what
-    the next step receives; ``to_env`` maps actions to the env's bounds.
+    the next step receives; ``to_env`` maps actions to the env's bounds. ``index`` (the
+    interaction's number) is named in an :class:`lili.env_calls.EnvError` when the env fails.
     """
     obs_l, act_l, rew_l, nxt_l = [], [], [], []
     success = None
@@ -65,7 +68,7 @@ def rollout(
             )
         a, acting = act(obs, acting)
         a = np.asarray(a, np.float32)
-        nxt, r, terminated, truncated, step_info = env.step(to_env(a))
+        nxt, r, terminated, truncated, step_info = env_step(env, to_env(a), where(index, t))
         obs_l.append(obs)
         act_l.append(a)
         rew_l.append(r)
@@ -169,11 +172,12 @@ class Stream:
         actions); the stored transitions are compared on the way, so an env that breaks the
         contract fails loudly instead of resuming to different numbers.
         """
-        obs, info = self.env.reset(seed=self.seed)
+        obs, info = env_reset(self.env, where(0), seed=self.seed)
         buf = self.buffer
         for i, acts in enumerate(self.action_log):
             for t, a in enumerate(acts):
-                obs, _, terminated, truncated, _ = self.env.step(self.to_env(a))
+                obs, _, terminated, truncated, _ = env_step(self.env, self.to_env(a),
+                                                            where(i, t))
                 if (terminated or truncated) != (t == len(acts) - 1):
                     raise CheckpointError(
                         f"replaying interaction {i} to resume: the env ended it after {t + 1} "
@@ -185,7 +189,7 @@ class Stream:
                     f"replaying interaction {i} to resume gave a different final observation "
                     f"than the checkpoint; the env is not deterministic under reset(seed)"
                 )
-            obs, info = self.env.reset()
+            obs, info = env_reset(self.env, where(i + 1))
         return obs, info
 
     def state_dict(self) -> dict[str, np.ndarray]:
@@ -264,13 +268,19 @@ def train(
     stream: Stream,
     n_interactions: int,
     progress: bool = False,
-    callback: Callable[[dict[str, Any]], None] | None = None,
+    callback: Callable[[dict[str, Any]], bool | None] | None = None,
     logger: Any = None,
 ) -> list[dict[str, Any]]:
     """Train ``agent`` on ``stream`` for ``n_interactions`` more interactions.
 
-    ``callback(row)`` is called after every interaction with its metrics row; ``logger`` (a
-    :class:`lili.runs.RunLogger`) writes the run folder and checkpoints. Returns the rows.
+    ``callback(row) -> bool | None`` is called after every interaction (after the logger
+    has written it) with its metrics row: ``interaction``, ``return``, ``length``,
+    ``success`` (None where the env reports none), ``strategy``, ``strategy_id``, the losses
+    of the interaction's update once learning has started (``critic_loss``, ``actor_loss``,
+    ``alpha``, ...) and ``wall_time``. Returning ``False`` stops training after that
+    interaction, as a Stable-Baselines3 callback does; None (no return) or True goes on.
+    ``logger`` (a :class:`lili.runs.RunLogger`) writes the run folder and checkpoints.
+    Returns the rows of the interactions played.
     Stops with :class:`NonFiniteError` at the first NaN or inf in an observation, a reward or a
     loss, before that interaction is logged or checkpointed (the last checkpoint stays good).
     """
@@ -306,8 +316,8 @@ def train(
                 def act(o, s, key=act_key):
                     return agent.act(o, s, key, False)
 
-            done = rollout(env, obs, info, act, acting, agent.scale_action, agent.horizon)
-            obs, info = env.reset()
+            done = rollout(env, obs, info, act, acting, agent.scale_action, agent.horizon, i)
+            obs, info = env_reset(env, where(i + 1))
             metrics: dict[str, float] = {}
             _check_finite(i, done["traj"], obs, metrics)
             stream.record(done["traj"], obs, info)
@@ -331,10 +341,10 @@ def train(
             }
             rows.append(row)
             recent.append(done["ret"])
-            if callback is not None:
-                callback(row)
             if logger is not None:
                 logger.log(row, agent, stream)
+            if callback is not None and callback(row) is False:
+                break
             if bar is not None:
                 stats = f"return(20) {np.mean(recent):8.3f}"
                 if done["success"] is not None:

@@ -28,6 +28,7 @@ from lili.buffer import check_buffer_fits
 from lili.config import AgentConfig, check_seed
 from lili.envs.core import ENV_ALIASES, RepeatedInteractionEnv, env_horizon, register_envs
 from lili.envs.wrappers import OracleObservation
+from lili.errors import shown
 
 __all__ = ["EnvContractError", "check_env", "load_env_class", "check_env_kwargs",
            "env_kwarg_names", "DEFAULT_INTERACTIONS", "MAX_INTERACTIONS"]
@@ -463,11 +464,14 @@ def _rollout(env: gym.Env, inner: gym.Env, seed: int, n_interactions: int, horiz
 def _check_obs(env: gym.Env, obs: Any, where: str, name: str) -> None:
     arr = np.asarray(obs)
     if np.issubdtype(arr.dtype, np.number) and not np.all(np.isfinite(arr)):
-        bad = np.flatnonzero(~np.isfinite(arr.ravel())).tolist()
-        raise _fail(name, f"{where}: the observation is not finite ({obs!r}; dimension(s) "
-                    f"{bad[:5]})", "finite observations (no NaN or infinity)")
+        flat = arr.ravel()
+        kinds = [(what, np.flatnonzero(test(flat)).tolist()) for what, test in
+                 (("NaN", np.isnan), ("infinity", np.isinf))]
+        found = "; ".join(f"{what} in dimension(s) {dims[:5]}" for what, dims in kinds if dims)
+        raise _fail(name, f"{where}: the observation is not finite ({found})",
+                    "finite observations (no NaN or infinity)")
     if not env.observation_space.contains(obs):
-        raise _fail(name, f"{where}: the observation {obs!r} is not in the observation space "
+        raise _fail(name, f"{where}: the observation {shown(obs)} is not in the observation space "
                     f"{env.observation_space!r}", "observations inside the observation space")
 
 

@@ -64,6 +64,9 @@ class RepeatedInteractionEnv(gym.Env):
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 10}
+    strategy_names: tuple[str, ...] = ()
+    """Names of the partner's discrete strategies, ``strategy_id`` 0, 1, ... (reports label
+    them so); empty where they have none."""
     horizon: int
     partner: Partner
 

@@ -65,6 +65,8 @@ class LanePartner:
 class Driving2DEnv(RepeatedInteractionEnv):
     """``lili/Driving2D-v0``: pass the other car without colliding (see the module docstring)."""
 
+    strategy_names = ("left lane", "right lane")
+
     def __init__(self, history: int = 1, render_mode: str | None = None) -> None:
         super().__init__(render_mode)
         self.horizon = 10

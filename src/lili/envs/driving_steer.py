@@ -119,6 +119,8 @@ class DrivingSteerEnv(RepeatedInteractionEnv):
     :class:`~lili.envs.steer_backend.SteerBackend` works.
     """
 
+    strategy_names = ("left", "right")
+
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 5}
 
     def __init__(self, history: int = 1, backend: SteerBackend | None = None,

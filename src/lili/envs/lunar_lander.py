@@ -225,6 +225,8 @@ class LunarLanderEnv(RepeatedInteractionEnv):
         render_mode: ``"rgb_array"`` or None.
     """
 
+    strategy_names = ("left pad", "right pad")
+
     def __init__(
         self, frame_skip: int = 5, horizon: int = 60, end_on_contact: bool = True,
         reward: str = "difference", render_mode: str | None = None,

@@ -16,8 +16,11 @@ import yaml
 
 from lili.config import AgentConfig, stored_agent_config
 from lili.envs.core import resolve_env_id
+from lili.errors import shown
 from lili.experiments.presets import PRESETS, Preset
+from lili.limits import MAX_INTERACTIONS, MAX_SEEDS, check_count
 from lili.runs import run_dir_for
+from lili.yaml_bounds import safe_load
 
 __all__ = ["RunSpec", "plan", "run_status", "QUICK_INTERACTIONS", "QUICK_CONFIG"]
 
@@ -97,10 +100,10 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
     ``aim_noise=0.02``); every env of the plan must take them (narrow it with ``envs``).
     Raises ValueError for a bad value, or when an existing run folder holds another config.
     """
-    if seeds is not None and (isinstance(seeds, bool) or seeds < 1):
-        raise ValueError(f"--seeds {seeds} is invalid; allowed: an integer >= 1")
-    if interactions is not None and (isinstance(interactions, bool) or interactions < 1):
-        raise ValueError(f"--interactions {interactions} is invalid; allowed: an integer >= 1")
+    if seeds is not None:
+        check_count(seeds, "--seeds", MAX_SEEDS)
+    if interactions is not None:
+        check_count(interactions, "--interactions", MAX_INTERACTIONS)
     if algos is not None:
         unknown = [a for a in algos if a not in preset.algos]
         if unknown:
@@ -174,8 +177,8 @@ def run_status(spec: RunSpec) -> str:
     if not (folder / "metrics.csv").exists():
         return "new"
     try:
-        old = yaml.safe_load(cfg_path.read_text())
-    except (OSError, yaml.YAMLError):
+        old = safe_load(cfg_path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
         raise ValueError(f"{cfg_path} is missing or unreadable; the folder holds a run that "
                          "reproduce cannot check: move it away or choose another --out") from None
     want = {"env": spec.env, "env_kwargs": spec.env_kwargs, "algo": spec.algo,
@@ -185,7 +188,8 @@ def run_status(spec: RunSpec) -> str:
         if key == "agent":
             have = stored_agent_config(have)
         if have != value:
-            detail = _diff(have, value) if key == "agent" else f"{have!r} there, {value!r} here"
+            detail = (_diff(have, value) if key == "agent"
+                      else f"{shown(have)} there, {shown(value)} here")
             raise ValueError(f"{folder} holds a run of another config ({key}: {detail}); "
                              "allowed: an --out whose runs match the preset (choose another "
                              "--out or move the folder away)")
@@ -203,6 +207,6 @@ def run_status(spec: RunSpec) -> str:
 
 def _diff(have: Any, want: dict[str, Any]) -> str:
     if not isinstance(have, dict):
-        return f"{have!r} there"
+        return f"{shown(have)} there"
     keys = sorted(k for k in set(have) | set(want) if have.get(k) != want.get(k))
     return ", ".join(f"{k}={have.get(k)!r} there, {want.get(k)!r} here" for k in keys)

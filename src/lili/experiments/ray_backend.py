@@ -15,10 +15,11 @@ import secrets
 import socket
 from pathlib import Path
 
+from lili.errors import shown
 from lili.experiments.plan import RunSpec
 from lili.experiments.runner import run_blocking
 
-__all__ = ["RayBackend", "RAY_MISSING"]
+__all__ = ["RayBackend", "RAY_MISSING", "check_address"]
 
 RAY_MISSING = ("--ray needs Ray, which is not installed; install the extra: "
                "pip install -e '.[ray]' (or pip install 'lili[ray]')")
@@ -31,6 +32,35 @@ def _import_ray():
     except ImportError:
         raise ValueError(RAY_MISSING) from None
     return ray
+
+
+ADDRESS_TIMEOUT_S = 3.0
+"""How long :func:`check_address` waits for the cluster's port to answer."""
+
+
+def check_address(address: str, timeout: float = ADDRESS_TIMEOUT_S) -> None:
+    """ValueError unless ``address`` is ``HOST:PORT`` (or ``ray://HOST:PORT``) where a TCP
+    connection opens within ``timeout`` seconds; ``auto`` (Ray finds the cluster itself) is
+    passed on. Checked before anything is written, since ``ray.init`` on an address where
+    nothing answers retries for minutes."""
+    if address == "auto":
+        return
+    rest = address[len("ray://"):] if address.startswith("ray://") else address
+    host, sep, port = rest.rpartition(":")
+    host = host[1:-1] if host.startswith("[") and host.endswith("]") else host
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536 \
+            or any(c.isspace() or c in "/@" for c in host):
+        raise ValueError(f"--ray {shown(address)} is invalid; allowed: HOST:PORT of a running "
+                         "`ray start --head` (e.g. 127.0.0.1:6379), ray://HOST:PORT, auto, or "
+                         "--ray alone for a local instance")
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout):
+            pass
+    except OSError as e:
+        reason = e.strerror or type(e).__name__
+        raise ValueError(f"--ray {address}: nothing answers at {host}:{port} within "
+                         f"{timeout:g} s ({reason}); allowed: the address of a running "
+                         "`ray start --head`") from None
 
 
 def _probe(folder: str, token: str) -> str:

@@ -13,6 +13,7 @@ from lili.experiments.plan import RunSpec, plan, run_status
 from lili.experiments.presets import get_preset
 from lili.experiments.progress import SweepProgress
 from lili.experiments.runner import log_path, rows_logged, write_agent_configs
+from lili.limits import MAX_JOBS, check_count
 from lili.runs import check_out_dir
 
 __all__ = ["reproduce", "LOCAL_JOBS"]
@@ -27,6 +28,10 @@ def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: 
     estimates = {s: estimate_seconds(s, rows_logged(s) if status[s] == "resume" else 0)
                  for s in todo}
     seconds = sum(estimates.values())
+    # Wall time: the runs spread over the jobs, but no faster than the longest run, and no
+    # more jobs at work than runs to do.
+    parallel = max(1, min(jobs, len(todo)))
+    wall = max([seconds / parallel, *estimates.values()])
     for s in specs:
         say(f"{status[s]:6}  {s.run_dir}  ({s.interactions} interactions"
             + (f", {s.env_kwargs}" if s.env_kwargs else "")
@@ -42,7 +47,7 @@ def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: 
         say(f"  {preset}: {sec / 3600:.1f} CPU-hours ("
             + ", ".join(f"{a} {v / 3600:.1f}" for v, a in algos) + ")")
     say(f"{name}: {len(specs)} runs ({len(todo)} to run, {len(specs) - len(todo)} done); "
-        f"estimated {seconds / 3600:.1f} CPU-hours, about {seconds / 3600 / jobs:.1f} h of "
+        f"estimated {seconds / 3600:.1f} CPU-hours, about {wall / 3600:.1f} h of "
         f"wall time with {jobs} jobs (from measured per-run costs, lili.experiments.costs)")
     return {"runs": len(specs), "to_run": len(todo), "cpu_hours": seconds / 3600,
             "by_preset": {k: v / 3600 for k, v in by_preset.items()}}
@@ -56,6 +61,22 @@ def _make_backend(ray: str | None, jobs: int | None, out: Path):
     from lili.experiments.ray_backend import RayBackend
 
     return RayBackend(None if ray == RAY_LOCAL else ray, jobs, out)
+
+
+def _start_backend(ray: str | None, jobs: int | None, out: Path):
+    """The backend, with ``out`` created for it; when it cannot start, the folders this made
+    are removed again (a refused cluster leaves no empty ``--out``)."""
+    missing = [p for p in (out, *out.parents) if not p.exists()]
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        return _make_backend(ray, jobs, out)
+    except BaseException:
+        for folder in missing:  # deepest first; only while empty
+            try:
+                folder.rmdir()
+            except OSError:
+                break
+        raise
 
 
 def _check_ray_importable() -> None:
@@ -96,10 +117,14 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     if sources is not None:
         raise ValueError(f"--sources {sources} is only read with --check-only; allowed: "
                          "--check-only --sources FILE")
-    if jobs is not None and (isinstance(jobs, bool) or jobs < 1):
-        raise ValueError(f"--jobs {jobs} is invalid; allowed: an integer >= 1")
+    if jobs is not None:
+        check_count(jobs, "--jobs", MAX_JOBS)
     out = Path(out)
     check_out_dir(out)
+    if ray is not None and ray != RAY_LOCAL:
+        from lili.experiments.ray_backend import check_address
+
+        check_address(ray)
     specs = plan(preset, out, seeds=seeds, interactions=interactions, algos=algos, quick=quick,
                  overrides=overrides, envs=envs, env_kwargs=env_kwargs)
     status = {s: run_status(s) for s in specs}
@@ -115,8 +140,7 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     todo = [s for s in specs if status[s] != "done"]
     t0 = time.time()
     if todo:
-        out.mkdir(parents=True, exist_ok=True)
-        backend = _make_backend(ray, jobs, out)
+        backend = _start_backend(ray, jobs, out)
         say(f"{name}: {len(specs)} runs, {len(specs) - len(todo)} done, {len(todo)} to run on "
             f"{backend.description}")
         failed = _run_all(backend, todo, len(specs) - len(todo), progress)

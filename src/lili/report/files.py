@@ -22,7 +22,9 @@ from typing import Any
 import numpy as np
 import yaml
 
+from lili.errors import shown
 from lili.report.style import algo_sort_key
+from lili.yaml_bounds import YAMLTooLarge, safe_load, yaml_problem
 
 __all__ = ["Run", "load_run", "find_runs", "METRICS_FILE", "CONFIG_FILE"]
 
@@ -146,7 +148,7 @@ def _parse_cell(text: str, path: Path, line: int, column: str) -> float:
         return float(text)
     except ValueError:
         raise ValueError(
-            f"{path}: line {line}, column {column!r}: {text!r} is not a number"
+            f"{path}: line {line}, column {shown(column)}: {shown(text)} is not a number"
         ) from None
 
 
@@ -172,7 +174,10 @@ def _read_metrics(path: Path) -> dict[str, np.ndarray]:
     try:
         raw = path.read_text(encoding="utf-8")
     except OSError as exc:
-        raise ValueError(f"{path}: cannot read metrics file ({exc})") from exc
+        raise ValueError(f"{path}: cannot read metrics file ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: metrics file is not UTF-8 text (byte {exc.start}); allowed: "
+                         "the CSV `lili train` writes") from None
     rows = list(csv.reader(raw.splitlines()))
     if not rows or not any(cell.strip() for cell in rows[0]):
         raise ValueError(f"{path}: metrics file is empty (no header)")
@@ -233,10 +238,12 @@ def _check_rows(path: Path, interaction: np.ndarray) -> None:
 
 
 def _expected_columns(header: list[str]) -> list[str]:
-    """The columns `lili train` writes (``lili.runs.RunLogger``), for this run's strategy size."""
+    """The columns `lili train` writes (``lili.runs.RunLogger``), for this run's strategy size:
+    as many ``strategy_<j>`` columns as the header has, none for an env that reports no
+    strategy (Pendulum-v1)."""
     from lili.runs import metric_columns
 
-    return metric_columns(max(1, sum(1 for c in header if _STRATEGY_RE.match(c))))
+    return metric_columns(sum(1 for c in header if _STRATEGY_RE.match(c)))
 
 
 def _check_against_run(run: Run) -> None:
@@ -265,9 +272,16 @@ def _check_against_run(run: Run) -> None:
 
 def _read_config(path: Path) -> dict[str, Any]:
     try:
-        config = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as exc:
-        raise ValueError(f"{path}: cannot read config ({exc})") from exc
+        config = safe_load(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot read config ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: config is not UTF-8 text; allowed: the YAML `lili train` "
+                         "writes") from None
+    except YAMLTooLarge as exc:
+        raise ValueError(f"{path}: config is refused: {exc}") from None
+    except yaml.YAMLError as exc:
+        raise ValueError(f"{path}: config is not valid YAML ({yaml_problem(exc)})") from None
     if not isinstance(config, dict):
         raise ValueError(f"{path}: config must be a mapping, got {type(config).__name__}")
     missing = [k for k in REQUIRED_CONFIG_KEYS if k not in config]
@@ -275,11 +289,11 @@ def _read_config(path: Path) -> dict[str, Any]:
         raise ValueError(f"{path}: config is missing key(s) {', '.join(missing)}")
     seed = config["seed"]
     if isinstance(seed, bool) or not isinstance(seed, int):
-        raise ValueError(f"{path}: config 'seed' must be an integer, got {seed!r}")
+        raise ValueError(f"{path}: config 'seed' must be an integer, got {shown(seed)}")
     for key in ("env", "algo"):
         if not isinstance(config[key], str) or not config[key]:
             raise ValueError(
-                f"{path}: config {key!r} must be a non-empty string, got {config[key]!r}"
+                f"{path}: config {key!r} must be a non-empty string, got {shown(config[key])}"
             )
     return config
 

@@ -6,6 +6,7 @@ P(X > Y), each with a stratified bootstrap 95% confidence interval (SciPy's
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterable, Sequence
 from typing import Any
@@ -234,8 +235,9 @@ def success_by_strategy(run: Run, window: int) -> np.ndarray:
 
 
 def strategy_names(env: str, n: int) -> list[str]:
-    """Names of strategies 0..n-1 (the paper's where known, else ``id k``)."""
-    names = (paper_reference(env) or {}).get("strategy_names", [])
+    """Names of strategies 0..n-1: the env's own (its class's ``strategy_names``), else the
+    paper's where known, else ``id k``."""
+    names = _env_strategy_names(env) or (paper_reference(env) or {}).get("strategy_names", [])
     return [names[k] if k < len(names) else f"id {k}" for k in range(n)]
 
 
@@ -312,3 +314,25 @@ def probability_of_improvement_ci(x: Sequence[float], y: Sequence[float],
     xa, ya = _values(x, "x"), _values(y, "y")
     low, high = _bootstrap((xa, ya), _p_improvement, n_resamples, seed)
     return float(_p_improvement(xa, ya)), low, high
+
+
+def _env_strategy_names(env: str) -> tuple[str, ...]:
+    """``strategy_names`` of the env's class (a registered id's entry point, or a
+    ``module:Class`` spec); empty when it defines none or cannot be imported here (a report
+    may be written where the env of a run is not installed)."""
+    try:
+        import gymnasium as gym
+        from gymnasium.envs.registration import load_env_creator
+
+        from lili.envs.checker import load_env_class
+
+        factory = load_env_class(env)
+        if isinstance(factory, functools.partial) and factory.func is gym.make:
+            entry = gym.registry[factory.args[0]].entry_point
+            factory = load_env_creator(entry) if isinstance(entry, str) else entry
+        names = getattr(factory, "strategy_names", ())
+    except Exception:  # noqa: BLE001 - any import failure means: no names from the env
+        return ()
+    if not isinstance(names, (tuple, list)):
+        return ()
+    return tuple(str(name) for name in names)

@@ -259,6 +259,8 @@ class AirHockeyEnv(RepeatedInteractionEnv):
             reads each transition's next observation) gains from it.
     """
 
+    strategy_names = MODE_NAMES
+
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"],
                                 "render_fps": round(1.0 / (FRAME_SKIP * 0.002))}
 
