@@ -177,26 +177,19 @@ def test_a_shot_counts_only_once_recorded(blocker, tmp_path):
     session.close()
 
 
-def test_recorder_checks_the_folder_at_start(tmp_path):
-    taken = tmp_path / "play-sessions"
-    taken.write_text("a file\n")
-    with pytest.raises(ValueError, match="the recording folder .*play-sessions.* is a file"):
-        Recorder(folder=taken)
-    with pytest.raises(ValueError, match="the recording folder .* is a file"):
-        Recorder(folder=taken / "below")
-    assert taken.read_text() == "a file\n"
-    Recorder(folder=tmp_path / "new" / "sessions")  # to be created at the first shot
-    assert not (tmp_path / "new").exists()
-
-
-def test_recorder_never_overwrites(tmp_path):
+def test_recorder_never_overwrites_and_checks_the_folder_at_start(tmp_path):
     existing = tmp_path / "taken.csv"
     existing.write_text("x\n")
     with pytest.raises(ValueError, match="already exists"):
         Recorder(file=existing)
     with pytest.raises(ValueError, match="does not exist"):
         Recorder(file=tmp_path / "nope" / "a.csv")
+    for folder in (existing, existing / "below"):  # a file where the folder should be
+        with pytest.raises(ValueError, match="the recording folder .*taken.csv.* is a file"):
+            Recorder(folder=folder)
     assert existing.read_text() == "x\n"
+    Recorder(folder=tmp_path / "new" / "sessions")  # made at the first shot, not before
+    assert not (tmp_path / "new").exists()
 
 
 def test_probe_reads_modes_off_latents():
