@@ -253,7 +253,7 @@ class LivePlay:
         start = time.monotonic()
         self.first_page = urllib.request.urlopen(self.url + "/", timeout=60).status
         self.first_page_s = time.monotonic() - start
-        self._wait_for("ready in")
+        self._wait_for("  ready: open http://127.0.0.1:")
 
     def _wait_for(self, text: str) -> str:
         deadline = time.monotonic() + 600

@@ -10,7 +10,6 @@ import argparse
 import json
 import logging
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
@@ -128,7 +127,6 @@ def _play(args: argparse.Namespace, path: Path, env_kwargs: dict[str, Any], reco
     from lili.play.server import create_app, listen, serve
 
     _log_to_stderr()
-    started = time.perf_counter()
     host, port = sock.getsockname()[:2]
     shown = f"[{host}]" if ":" in host else host
     print(f"lili play: {blocker.algo} from {path}; getting ready (the page opens at "
@@ -141,7 +139,7 @@ def _play(args: argparse.Namespace, path: Path, env_kwargs: dict[str, Any], reco
         print(f"warning: --host {args.host} makes the page reachable from other machines; the "
               "server has no authentication", file=sys.stderr)
     listen(sock)
-    print(f"  ready in {time.perf_counter() - started:.1f} s: open http://{shown}:{port}/ "
+    print(f"  ready: open http://{shown}:{port}/ "
           f"(Ctrl-C to stop); sessions are recorded in {recorder.where}", flush=True)
     try:
         serve(app, sock)

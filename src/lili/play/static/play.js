@@ -139,9 +139,9 @@
   function showResult(score) {
     const body = document.querySelector("#study tbody");
     const names = { sac: "SAC", "lili-no-influence": "LILI (no influence)" };
-    const rows = [[`${algo} (this page)`, "you", score.blocks, score.shots, true]];
+    const rows = [[`${algo}, this page`, "you", score.blocks, score.shots, true]];
     for (const [key, blocks] of Object.entries(paper ? paper.blocks : {})) {
-      rows.push([names[key] || key, "expert human (paper)", blocks, paper.shots, false]);
+      rows.push([`${names[key] || key}, paper`, "expert human", blocks, paper.shots, false]);
     }
     body.innerHTML = "";
     for (const [who, striker, b, n, you] of rows) {
