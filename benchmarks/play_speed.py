@@ -77,7 +77,8 @@ def socket_time(blocker: Blocker, kwargs: dict, shots: int, tmp: Path) -> dict:
 
     app = create_app(blocker, kwargs, shots, Recorder(file=tmp / "ws.csv"), None, speed=1e9)
     per_frame = []
-    with ServerThread(app) as srv, connect(srv.url.replace("http", "ws") + "/ws") as ws:
+    with ServerThread(app) as srv, connect(srv.url.replace("http", "ws") + "/ws",
+                                           origin=srv.url) as ws:
         ws.recv(timeout=30)
         for aim in np.linspace(-0.5, 0.5, shots):
             start, n = time.perf_counter(), 0

@@ -18,10 +18,11 @@ import yaml
 import lili.envs  # noqa: F401 - registers the ids
 from lili import cli
 from lili.envs.air_hockey.env import NEXT_MODE, TARGET_X
+from lili.play.origin import OriginPolicy, check_origin
 from lili.play.policy import Blocker, interaction_steps
 from lili.play.probe import ModeProbe
 from lili.play.protocol import ProtocolError, RateLimiter, parse_message
-from lili.play.record import Recorder
+from lili.play.record import Recorder, RecordError
 from lili.play.session import GameSession, make_play_env
 from lili.play.striker import (
     AIM_LIMIT,
@@ -47,7 +48,8 @@ def untrained_agent_file(factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-def make_run_folder(root: Path, agent_file: Path, env: str = "lili/AirHockey-v0") -> Path:
+def make_run_folder(root: Path, agent_file: Path, env: str = "lili/AirHockey-v0",
+                    algo: str = "lili") -> Path:
     """A run folder in the layout of ``lili train`` holding ``agent_file`` as its checkpoint."""
     run = root / "run"
     ck = run / "checkpoints" / "ckpt_0"
@@ -56,7 +58,7 @@ def make_run_folder(root: Path, agent_file: Path, env: str = "lili/AirHockey-v0"
     (run / "checkpoints" / "latest.json").write_text(json.dumps({"checkpoint": "ckpt_0",
                                                                 "interactions": 0}))
     (run / "config.yaml").write_text(yaml.safe_dump({"env": env, "env_kwargs": {},
-                                                     "algo": "lili", "seed": 0,
+                                                     "algo": algo, "seed": 0,
                                                      "interactions": 0, "agent": {}}))
     return run
 
@@ -152,14 +154,42 @@ def test_session_scores_and_records(blocker, tmp_path):
                              "paddle_x"]
 
 
-def test_recorder_never_overwrites(tmp_path):
+def test_a_shot_counts_only_once_recorded(blocker, tmp_path):
+    """A row that cannot be written ends the game there: the shot is not counted, and the rows
+    before it stay as they were (here the session's folder is replaced by a file mid-game)."""
+    folder = tmp_path / "sessions"
+    session = GameSession(blocker, {}, 5, Recorder(folder=folder).session())
+    assert session.belief() is None  # nothing to believe before the first shot
+    session.play(-0.4)
+    session.play(0.4)
+    kept = tmp_path / "kept"
+    folder.rename(kept)
+    folder.write_text("not a folder\n")
+    with pytest.raises(RecordError, match="could not record shot 3 in .*sessions"):
+        session.play(0.0)
+    assert session.over and session.shot == 2 and "could not record shot 3" in session.ended
+    assert session.score()["shots"] == 2 and session.score()["goals"] == \
+        2 - session.score()["blocks"]
+    rows = list(csv.DictReader(next(kept.glob("session-*.csv")).open()))
+    assert [r["shot"] for r in rows] == ["1", "2"]
+    with pytest.raises(ValueError, match="game is over \\(2 of 5 shots played\\)"):
+        session.play(0.0)
+    session.close()
+
+
+def test_recorder_never_overwrites_and_checks_the_folder_at_start(tmp_path):
     existing = tmp_path / "taken.csv"
     existing.write_text("x\n")
     with pytest.raises(ValueError, match="already exists"):
         Recorder(file=existing)
     with pytest.raises(ValueError, match="does not exist"):
         Recorder(file=tmp_path / "nope" / "a.csv")
+    for folder in (existing, existing / "below"):  # a file where the folder should be
+        with pytest.raises(ValueError, match="the recording folder .*taken.csv.* is a file"):
+            Recorder(folder=folder)
     assert existing.read_text() == "x\n"
+    Recorder(folder=tmp_path / "new" / "sessions")  # made at the first shot, not before
+    assert not (tmp_path / "new").exists()
 
 
 def test_probe_reads_modes_off_latents():
@@ -300,10 +330,45 @@ def test_lagged_agents_play_and_the_oracle_is_refused(tmp_path):
     ('{"type": "shoot", "aim": true}', "aim True is invalid"),
     ('{"type": "shoot", "aim": 0.9}', "aim 0.9 is invalid; allowed: a number of radians"),
     ('{"type": "shoot", "aim": 1e400}', "aim inf is invalid"),
+    ('{"type": "shoot", "aim": 1' + "0" * 309 + "}", "aim \\(an integer of 310 digits\\) is "
+     "invalid"),
+    ('{"type": "shoot", "aim": -1' + "0" * 900 + "}", "an integer of 901 digits"),
+    ('{"type": "shoot", "aim": 1}', "aim 1 is invalid"),
+    ('{"type": 1' + "0" * 500 + "}", "type '\\(an integer of 501 digits\\)' is unknown"),
 ])
 def test_protocol_rejects_with_a_message(raw, match):
     with pytest.raises(ProtocolError, match=match):
         parse_message(raw)
+
+
+@pytest.mark.parametrize("origin, host, refused", [
+    ("http://127.0.0.1:8000", "127.0.0.1:8000", None),
+    ("http://localhost:8000", "localhost:8000", None),
+    ("http://[::1]:8000", "[::1]:8000", None),
+    ("http://LOCALHOST:8000", "localhost:8000", None),
+    ("http://evil.example", "127.0.0.1:8000", "Origin 'http://evil.example' is not this page's"),
+    ("http://127.0.0.1:8001", "127.0.0.1:8000", "is not this page's"),
+    ("https://127.0.0.1:8000", "127.0.0.1:8000", "is not this page's"),
+    ("null", "127.0.0.1:8000", "Origin 'null'"),
+    (None, "127.0.0.1:8000", "no Origin header"),
+    ("http://127.0.0.1:8000", "evil.example:8000", "Host 'evil.example:8000' is not this "
+     "server's"),  # DNS rebinding: the page's own origin under another name
+    ("http://127.0.0.1:8000", None, "Host '' is not"),
+    ("http://192.168.1.5:8000", "192.168.1.5:8000", None),  # --allow-origin
+])
+def test_origin_policy(origin, host, refused):
+    headers = [(k.encode(), v.encode()) for k, v in (("origin", origin), ("host", host)) if v]
+    scope = {"headers": headers, "server": ("127.0.0.1", 8000)}
+    got = OriginPolicy(["http://192.168.1.5:8000/"]).refusal(scope)
+    assert got is None if refused is None else refused in got
+
+
+@pytest.mark.parametrize("value", ["*", "192.168.1.5:8000", "http://h:8000/page", "ftp://h",
+                                   "http://user@h", "http://h:99999", "http://h?x=1", ""])
+def test_allow_origin_refuses_what_is_not_an_origin(value):
+    with pytest.raises(ValueError, match="--allow-origin .* is invalid; allowed: an origin "
+                                         "such as http://192.168.1.5:8000"):
+        check_origin(value)
 
 
 def test_protocol_accepts_a_shot_and_limits_rate():
@@ -356,6 +421,8 @@ def test_cli_uses_the_shipped_agent(capsys, tmp_path, agent_file, monkeypatch):
     (["play", "air-hockey", "--run", "/nonexistent"], "is not a run folder"),
     (["play", "air-hockey", "--bot-lapse", "1.5"], "bot lapse=1.5 is invalid"),
     (["play", "air-hockey", "--host", "203.0.113.1", "--port", "0"], "cannot listen on"),
+    (["play", "air-hockey", "--allow-origin", "evil.example"], "--allow-origin 'evil.example' "
+     "is invalid"),
 ])
 def test_cli_bad_input_one_message(capsys, argv, match, agent_file, monkeypatch):
     import lili.play.policy as policy
@@ -380,6 +447,21 @@ def test_cli_bad_run_and_record(capsys, tmp_path, agent_file):
     (run / "checkpoints" / "ckpt_0" / "agent.msgpack").write_bytes(b"garbage")
     code, _, err = _cli(capsys, ["play", "air-hockey", "--run", str(run), "--bot"])
     assert code == 2 and "corrupt" in err and not (run / "play").exists()
+
+
+def test_cli_refuses_a_recording_folder_it_cannot_write(capsys, tmp_path, agent_file,
+                                                         monkeypatch):
+    """`./play-sessions` a file (the issue's "[Errno 17] File exists" at the first shot): one
+    line and exit 2 at start-up, before a port is taken or anything is written."""
+    import lili.play.policy as policy
+
+    monkeypatch.setattr(policy, "SHIPPED_AGENT", agent_file)
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "play-sessions").write_text("in the way\n")
+    code, out, err = _cli(capsys, ["play", "air-hockey", "--port", "0"])
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    assert "the recording folder 'play-sessions' is invalid: 'play-sessions' is a file" in err
+    assert (tmp_path / "play-sessions").read_text() == "in the way\n"
 
 
 def test_ship_script_at_a_tiny_budget_and_from_a_run(tmp_path, capsys):

@@ -15,10 +15,13 @@ from lili.play.record import SessionRecord
 from lili.play.session import GameSession
 from lili.play.striker import MODE_NAMES, BotConfig, BotStriker
 
-__all__ = ["run_bot", "PAPER_HUMAN", "bot_report"]
+__all__ = ["run_bot", "PAPER_HUMAN", "PAPER_LILI", "bot_report"]
 
 # The paper's Section 5 ("Playing Against a Human Expert"): blocks out of 40 shots.
 PAPER_HUMAN = {"sac": 18, "lili-no-influence": 29}
+# ... and why LILI itself has no number there (Section 6).
+PAPER_LILI = ("LILI was not played against the human: the paper found it too brittle (it "
+              "blocked with its paddle's edges)")
 
 
 def run_bot(blocker: Blocker | ScriptedBlocker, env_kwargs: dict[str, Any], shots: int = 40,

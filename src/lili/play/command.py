@@ -8,13 +8,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import sys
 from pathlib import Path
 from typing import Any
 
+from lili.play.origin import LOOPBACK
+
 __all__ = ["add_arguments", "run_play", "LOOPBACK"]
 
-LOOPBACK = ("127.0.0.1", "localhost", "::1")
 MAX_SHOTS = 1000
 
 
@@ -25,6 +27,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1: this machine only)")
     p.add_argument("--port", type=int, default=8000, help="port (default 8000; 0 = any free)")
+    p.add_argument("--allow-origin", action="append", default=[], metavar="ORIGIN",
+                   help="also accept the page's WebSocket from this origin, e.g. "
+                   "http://192.168.1.5:8000 for a demo on a LAN (repeatable; default: only "
+                   "http://127.0.0.1|localhost|[::1]:PORT)")
     p.add_argument("--shots", type=int, default=40, help="shots per game (default 40, as the "
                    "paper's human study)")
     p.add_argument("--record", metavar="FILE", help="write every session's shots to this new "
@@ -69,6 +75,9 @@ def _check_args(args: argparse.Namespace) -> None:
         raise ValueError(f"--seed {args.seed} is invalid; allowed: an integer >= 0")
     if not 0 <= args.port <= 65535:
         raise ValueError(f"--port {args.port} is invalid; allowed: an integer in 0..65535")
+    from lili.play.origin import check_origin
+
+    args.allow_origin = [check_origin(o) for o in args.allow_origin]
 
 
 def run_play(args: argparse.Namespace) -> int:
@@ -87,6 +96,8 @@ def run_play(args: argparse.Namespace) -> int:
     if not args.bot:
         from lili.play.server import bind
 
+        # Bound (the port is checked) but not listening: a visitor who comes before the page is
+        # ready is refused at once instead of waiting on a connection nobody answers.
         sock = bind(args.host, args.port)
     try:
         return _play(args, path, env_kwargs, recorder, bot_config, sock)
@@ -113,19 +124,46 @@ def _play(args: argparse.Namespace, path: Path, env_kwargs: dict[str, Any], reco
         return 0
 
     from lili.play.probe import ModeProbe
-    from lili.play.server import create_app, serve
+    from lili.play.server import create_app, listen, serve
 
-    probe = ModeProbe.for_blocker(blocker, env_kwargs, seed=args.seed)
-    app = create_app(blocker, env_kwargs, args.shots, recorder, probe, args.seed)
+    _log_to_stderr()
     host, port = sock.getsockname()[:2]
+    shown = f"[{host}]" if ":" in host else host
+    print(f"lili play: {blocker.algo} from {path}; getting ready (the page opens at "
+          f"http://{shown}:{port}/ once ready)", flush=True)
+    probe = ModeProbe.for_blocker(blocker, env_kwargs, seed=args.seed)
+    _warm_up(blocker, env_kwargs)
+    app = create_app(blocker, env_kwargs, args.shots, recorder, probe, args.seed,
+                     allow_origins=tuple(args.allow_origin))
     if args.host not in LOOPBACK:
         print(f"warning: --host {args.host} makes the page reachable from other machines; the "
               "server has no authentication", file=sys.stderr)
-    shown = f"[{host}]" if ":" in host else host
-    print(f"lili play: {blocker.algo} from {path}\n  open http://{shown}:{port}/ "
+    listen(sock)
+    print(f"  ready: open http://{shown}:{port}/ "
           f"(Ctrl-C to stop); sessions are recorded in {recorder.where}", flush=True)
     try:
         serve(app, sock)
     except KeyboardInterrupt:
         pass
     return 0
+
+
+def _warm_up(blocker: Any, env_kwargs: dict[str, Any]) -> None:
+    """Play one unrecorded shot, so the first visitor's shot does not wait for compilation."""
+    from lili.play.session import GameSession
+
+    session = GameSession(blocker, env_kwargs, 1)
+    try:
+        session.play(0.0)
+    finally:
+        session.close()
+
+
+def _log_to_stderr() -> None:
+    """The server's log lines (refused connections, recording failures) as lines on stderr."""
+    logger = logging.getLogger("lili.play")
+    if not logger.handlers:
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("%(message)s"))
+        logger.addHandler(handler)
+        logger.setLevel(logging.INFO)

@@ -58,7 +58,7 @@ def parse_message(raw: Any) -> dict[str, Any]:
         raise ProtocolError(f"message lacks type; allowed types: {', '.join(SCHEMA)}")
     kind = msg["type"]
     if not isinstance(kind, str) or kind not in SCHEMA:
-        raise ProtocolError(f"message type {str(kind)[:40]!r} is unknown; allowed: "
+        raise ProtocolError(f"message type {_shown(kind)!r} is unknown; allowed: "
                             f"{', '.join(SCHEMA)}")
     fields = SCHEMA[kind]
     extra = sorted(set(msg) - {"type", *fields})
@@ -69,11 +69,22 @@ def parse_message(raw: Any) -> dict[str, Any]:
     if missing:
         raise ProtocolError(f"{kind} message lacks {', '.join(missing)}")
     aim = msg["aim"]
-    if isinstance(aim, bool) or not isinstance(aim, (int, float)) or not math.isfinite(aim) \
-            or abs(aim) > AIM_LIMIT:
-        raise ProtocolError(f"aim {str(aim)[:40]} is invalid; allowed: a number of radians in "
+    # Type, then finiteness (floats only), then range, all before any arithmetic: an int's
+    # comparison with a float is exact whatever its size, where float(10**309) overflows.
+    if isinstance(aim, bool) or not isinstance(aim, (int, float)) \
+            or (isinstance(aim, float) and not math.isfinite(aim)) \
+            or not -AIM_LIMIT <= aim <= AIM_LIMIT:
+        raise ProtocolError(f"aim {_shown(aim)} is invalid; allowed: a number of radians in "
                             f"[-{AIM_LIMIT}, {AIM_LIMIT}]")
     return {"type": kind, "aim": float(aim)}
+
+
+def _shown(value: Any, limit: int = 40) -> str:
+    """``value`` as text of at most ``limit`` characters (a huge int is never fully printed)."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**limit:
+        return f"(an integer of {len(str(abs(value)))} digits)"
+    text = str(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 class RateLimiter:

@@ -8,9 +8,13 @@
   const statusEl = document.getElementById("status");
   // Exposed for tests and benchmarks: page state and the measured frame rate.
   const lili = (window.lili = { connected: false, ready: false, over: false, shots: 0,
-                                results: [], errors: [], fps: 0, frames: 0 });
-  let geo = null, speed = 1, prev = null, cur = null, curTime = 0, aim = null, flash = null;
-  let probe = null, beliefs = [];
+                                results: [], errors: [], cancelled: 0, ended: null, fps: 0,
+                                frames: 0, ws: null });
+  // A press must move this far (table metres) before its release shoots: a click does not.
+  const MIN_DRAG = 0.08;
+  let geo = null, speed = 1, prev = null, cur = null, curTime = 0, aim = null, press = null;
+  let flash = null, probe = null, beliefs = [], paper = null, algo = "", pending = false;
+  let resetTimer = null, ws = null;
 
   const X = (x) => M + (x + geo.half_width) * S;
   const Y = (y) => M + (geo.half_length - y) * S;
@@ -20,31 +24,68 @@
     statusEl.className = isError ? "error" : "";
   }
 
-  const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws`);
-  ws.onopen = () => { lili.connected = true; };
-  ws.onclose = () => { lili.connected = false; lili.ready = false;
-                       if (!lili.over) setStatus("disconnected: reload the page for a new game", true); };
-  ws.onmessage = (ev) => {
-    const msg = JSON.parse(ev.data);
-    if (msg.type === "init") onInit(msg);
-    else if (msg.type === "frame") onFrame(msg);
-    else if (msg.type === "result") onResult(msg);
-    else if (msg.type === "game_over") onGameOver(msg);
-    else if (msg.type === "error") { lili.errors.push(msg.error); setStatus(msg.error, true); }
-  };
+  // One game per connection: a new game is a new connection (the server starts a new session
+  // and a new record; the old one's rows stay as they are).
+  function connect() {
+    if (ws) { ws.onclose = null; ws.close(); }
+    Object.assign(lili, { connected: false, ready: false, over: false, shots: 0, results: [],
+                          errors: [], cancelled: 0, ended: null });
+    beliefs = []; aim = null; press = null; flash = null; pending = false; cur = prev = null;
+    document.getElementById("result").hidden = true;
+    setStatus("connecting…");
+    const sock = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws`);
+    ws = lili.ws = sock;
+    sock.onopen = () => { lili.connected = true; };
+    sock.onclose = () => {
+      lili.connected = false; lili.ready = false;
+      if (!lili.over) setStatus("disconnected: press New game (or reload the page)", true);
+    };
+    sock.onmessage = (ev) => {
+      const msg = JSON.parse(ev.data);
+      if (msg.type === "init") onInit(msg);
+      else if (msg.type === "frame") { pending = false; onFrame(msg); }
+      else if (msg.type === "result") onResult(msg);
+      else if (msg.type === "game_over") onGameOver(msg);
+      else if (msg.type === "error") onError(msg);
+    };
+  }
+  document.getElementById("new-game").addEventListener("click", connect);
+
+  function onError(msg) {
+    lili.errors.push(msg.error);
+    setStatus(msg.error, true);
+    // A shot the server refused was not played: the visitor may shoot again.
+    if (pending && !lili.over) { pending = false; lili.ready = true; }
+  }
+
+  const AIM_HINT = "your shot: press on the table, drag towards your target, release";
+
+  function startPosition() {
+    return { puck: geo.puck_start, paddle: 0, striker: [geo.puck_start[0],
+      geo.puck_start[1] + geo.puck_radius + geo.paddle_radius + 0.01] };
+  }
+
+  // The table as it is before every shot: the puck back at its start, the paddles home.
+  function resetTable() {
+    if (resetTimer !== null) { clearTimeout(resetTimer); resetTimer = null; }
+    if (geo) { cur = prev = startPosition(); curTime = 0; }
+  }
 
   function onInit(msg) {
     geo = msg.table;
     speed = msg.speed || 1;
-    document.getElementById("algo").textContent =
-      `${msg.algo} (blocker trained on ${msg.interactions} interactions)`;
+    algo = msg.algo;
+    paper = msg.paper;
+    document.getElementById("algo").textContent = msg.algo;
+    document.getElementById("trained").textContent =
+      `(robot blocker trained on ${msg.interactions} interactions)`;
     probe = msg.probe;
     const note = document.getElementById("probe-note");
     if (probe) {
-      note.textContent = `Predicted mode of your next shot: a probe on the blocker's ${msg.latent_dim}-D ` +
-        `latent, fitted on ${probe.n_fit} simulated shots (held-out accuracy ` +
-        `${Math.round(100 * probe.accuracy)}% on ${probe.n_test}). Below: the latent's two ` +
-        `principal components; the ring is what it believes now.`;
+      note.textContent = `The belief is a probe on the robot's ${msg.latent_dim}-D latent ` +
+        `predicting the mode of your next shot, fitted on ${probe.n_fit} simulated shots ` +
+        `(held-out accuracy ${Math.round(100 * probe.accuracy)}% on ${probe.n_test}). Above: ` +
+        `the latent's two principal components; the ring is what it believes now.`;
     } else {
       note.textContent = `${msg.algo} has no latent: it cannot form a belief about your next shot.`;
     }
@@ -52,10 +93,10 @@
     showScore(msg.score);
     showBelief(msg.belief);
     drawAims();
-    cur = prev = { puck: geo.puck_start, paddle: 0, striker: [geo.puck_start[0],
-      geo.puck_start[1] + geo.puck_radius + geo.paddle_radius + 0.01] };
+    drawLatent();
+    resetTable();
     lili.ready = true;
-    setStatus("your shot: press, drag, release");
+    setStatus(AIM_HINT);
   }
 
   function onFrame(msg) {
@@ -72,33 +113,80 @@
     showBelief(msg.belief);
     drawAims();
     if (!msg.done) {
+      resetTimer = setTimeout(resetTable, 900);
       lili.ready = true;
-      setStatus(`shot ${msg.shot} (${msg.mode}) ${msg.blocked ? "blocked" : "scored"}; your shot`);
+      setStatus(`shot ${msg.shot} (${msg.mode}): ${msg.blocked ? "the robot blocked it" : "you scored"}. ` +
+        "Your next shot: press, drag, release");
     }
   }
 
   function onGameOver(msg) {
     lili.over = true;
     lili.ready = false;
+    pending = false;
     const s = msg.score;
-    setStatus(`game over: the blocker stopped ${s.blocks} of ${s.shots} shots; reload to play again`);
+    if (msg.ended) {
+      lili.ended = msg.ended;
+      setStatus(`Recording failed: ${msg.ended}. Press New game to try again.`, true);
+    } else {
+      setStatus(`Game over: you scored ${s.goals} of ${s.shots}; the robot blocked ${s.blocks}. ` +
+        "Press New game to play again.");
+    }
+    showResult(s);
+  }
+
+  // The visitor's game beside the paper's human study (Section 5: an expert human, 40 shots).
+  function showResult(score) {
+    const body = document.querySelector("#study tbody");
+    const names = { sac: "SAC", "lili-no-influence": "LILI (no influence)" };
+    const rows = [[`${algo}, this page`, "you", score.blocks, score.shots, true]];
+    for (const [key, blocks] of Object.entries(paper ? paper.blocks : {})) {
+      rows.push([`${names[key] || key}, paper`, "expert human", blocks, paper.shots, false]);
+    }
+    body.innerHTML = "";
+    for (const [who, striker, b, n, you] of rows) {
+      const pct = n ? ` (${Math.round((100 * b) / n)}%)` : "";
+      const tr = document.createElement("tr");
+      if (you) tr.className = "you";
+      for (const text of [who, striker, `${b}/${n}${pct}`]) {
+        const td = document.createElement("td"); td.textContent = text; tr.appendChild(td);
+      }
+      body.appendChild(tr);
+    }
+    document.getElementById("study-note").textContent = paper ? `${paper.lili}.` : "";
+    const panel = document.getElementById("result");
+    panel.hidden = false;
+    panel.scrollIntoView({ block: "nearest" });
   }
 
   function showScore(score) {
     for (const [mode, [b, n]] of Object.entries(score.by_mode)) {
       const row = document.querySelector(`tr[data-mode=${mode}]`);
       row.querySelector(".b").textContent = b;
+      row.querySelector(".g").textContent = n - b;
       row.querySelector(".s").textContent = n;
     }
     document.getElementById("blocks").textContent = score.blocks;
+    document.getElementById("goals").textContent = score.goals;
+    document.getElementById("total-blocks").textContent = score.blocks;
+    document.getElementById("total-goals").textContent = score.goals;
     document.getElementById("shots").textContent = score.shots;
     document.getElementById("remaining").textContent = `${score.of - score.shots} of ${score.of} shots left`;
   }
 
   function showBelief(belief) {
     const bars = document.getElementById("bars");
+    const note = document.getElementById("belief-note");
     bars.innerHTML = "";
-    if (!belief || !geo) return;
+    if (!geo) return;
+    if (!belief) {
+      note.textContent = probe
+        ? "No belief yet: the robot forms one from your shots, after the first."
+        : `${algo} has no latent, so no belief about your next shot.`;
+      drawLatent();
+      return;
+    }
+    note.textContent = "Where it expects your next shot:";
     beliefs.push(belief.xy);
     geo.mode_names.forEach((name, i) => {
       const p = belief.probs[i];
@@ -169,30 +257,50 @@
   }
 
   function pointerAim(ev) {
-    const r = canvas.getBoundingClientRect();
-    const x = ((ev.clientX - r.left) * (canvas.width / r.width) - M) / S - geo.half_width;
-    const y = geo.half_length - ((ev.clientY - r.top) * (canvas.height / r.height) - M) / S;
+    const [x, y] = pointerXY(ev);
     const dx = x - geo.puck_start[0], dy = Math.min(y - geo.puck_start[1], -1e-3);
     const a = Math.atan2(dx, -dy);
     return Math.max(-geo.aim_limit, Math.min(geo.aim_limit, a));
   }
 
+  // Table metres of a pointer event, unclamped (for the drag length).
+  function pointerXY(ev) {
+    const r = canvas.getBoundingClientRect();
+    return [((ev.clientX - r.left) * (canvas.width / r.width) - M) / S - geo.half_width,
+            geo.half_length - ((ev.clientY - r.top) * (canvas.height / r.height) - M) / S];
+  }
+
   canvas.addEventListener("pointerdown", (ev) => {
     if (!lili.ready) return;
     canvas.setPointerCapture(ev.pointerId);
+    resetTable();
+    press = pointerXY(ev);
     aim = pointerAim(ev);
   });
   canvas.addEventListener("pointermove", (ev) => { if (aim !== null) aim = pointerAim(ev); });
   canvas.addEventListener("pointerup", (ev) => {
     if (aim === null) return;
-    const a = pointerAim(ev);
-    aim = null;
+    const a = pointerAim(ev), [x, y] = pointerXY(ev);
+    const drag = Math.hypot(x - press[0], y - press[1]);
+    aim = null; press = null;
     if (!lili.ready) return;
+    if (drag < MIN_DRAG) {
+      lili.cancelled++;
+      setStatus(`No shot: drag at least ${Math.round(100 * MIN_DRAG)} cm on the table to shoot ` +
+        "(a click does not shoot). " + AIM_HINT);
+      return;
+    }
     lili.ready = false;
+    pending = true;
     ws.send(JSON.stringify({ type: "shoot", aim: a }));
     setStatus("shot in flight…");
   });
-  canvas.addEventListener("pointercancel", () => { aim = null; });
+  canvas.addEventListener("pointercancel", () => { aim = null; press = null; });
+
+  function label(text, x, y, colour, font) {
+    ctx.font = `${font || "12px"} system-ui, sans-serif`; ctx.textAlign = "center";
+    ctx.fillStyle = colour; ctx.fillText(text, X(x), Y(y));
+  }
 
   function circle(x, y, r, fill, stroke) {
     ctx.beginPath(); ctx.arc(X(x), Y(y), r * S, 0, 2 * Math.PI);
@@ -218,6 +326,12 @@
       ctx.fillStyle = MODE_COLOURS[name]; ctx.globalAlpha = 0.35;
       ctx.fillRect(X(end[0]) - 14, Y(geo.ego_y) + 14, 28, 5); ctx.globalAlpha = 1;
     });
+    // The goal the visitor shoots at: the robot's end wall.
+    ctx.fillStyle = "#c2362f"; ctx.globalAlpha = 0.18;
+    ctx.fillRect(X(-geo.half_width), Y(geo.ego_y - geo.paddle_radius), 2 * geo.half_width * S,
+                 (geo.half_length + geo.ego_y - geo.paddle_radius) * S);
+    ctx.globalAlpha = 1;
+    label("GOAL: get the puck past the robot", 0, -geo.half_length - 0.045, "#7a1d18", "bold 12px");
     if (!cur) return;
     const speedMs = (geo.dt * 1000) / speed;
     const f = Math.min(1, (now - curTime) / speedMs);
@@ -227,6 +341,10 @@
     circle(striker[0], striker[1], geo.paddle_radius, "#c2362f", "#7a1d18");
     circle(lerp(prev.paddle, cur.paddle), geo.ego_y, geo.paddle_radius, "#2f6fd6", "#173d7a");
     circle(puck[0], puck[1], geo.puck_radius, "#1d232a");
+    const paddleX = lerp(prev.paddle, cur.paddle);
+    label("you: striker", striker[0], striker[1] + geo.paddle_radius + 0.035, "#7a1d18");
+    label("robot: blocker", Math.max(-0.3, Math.min(0.3, paddleX)),
+          geo.ego_y + geo.paddle_radius + 0.035, "#173d7a");
     if (aim !== null) {
       const pts = aimPath(aim);
       ctx.strokeStyle = "#c2362f"; ctx.lineWidth = 2; ctx.setLineDash([8, 5]);
@@ -253,4 +371,5 @@
     requestAnimationFrame(loop);
   }
   requestAnimationFrame(loop);
+  connect();
 })();
