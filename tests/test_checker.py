@@ -12,14 +12,8 @@ from gymnasium import spaces
 
 import lili.envs  # noqa: F401 - registers the envs
 from lili.envs import OracleObservation, RepeatedInteractionEnv
-from lili.envs.checker import (
-    DEFAULT_INTERACTIONS,
-    EnvContractError,
-    check_env,
-    check_env_kwargs,
-    env_kwarg_names,
-    load_env_class,
-)
+from lili.envs.checker import DEFAULT_INTERACTIONS, EnvContractError, check_env
+from lili.envs.spec import check_env_kwargs, env_kwarg_names, load_env_class, make_env
 from lili.envs.point_mass import PointMassEnv
 
 
@@ -323,7 +317,16 @@ def test_never_varying_strategy_warns_that_leaks_were_not_checked() -> None:
         check_env(StuckEnv)
 
 
-# -- load_env_class ------------------------------------------------------------------------------
+# -- env specs (lili.envs.spec) ------------------------------------------------------------------
+
+
+def test_make_env_checks_the_options_by_name_then_builds() -> None:
+    env = make_env("point-mass", {"history": 2}, render_mode="rgb_array")
+    assert env.unwrapped.partner.votes.n == 2 and env.unwrapped.render_mode == "rgb_array"
+    with pytest.raises(ValueError, match="unknown env kwarg.s. 'lanes' for driving-2d"):
+        make_env("driving-2d", {"lanes": 4})
+    with pytest.raises(ValueError, match="^env point-mass: .*step_noise"):
+        make_env("point-mass", {"step_noise": -1.0})
 
 
 def test_load_env_class_resolves_module_class_and_ids() -> None:

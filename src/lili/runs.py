@@ -1,7 +1,8 @@
 """Run folders: ``<out>/<env>/<algo>/seed_<k>/`` with config, metrics, TensorBoard, checkpoints.
 
 - ``config.yaml``: the resolved configuration (env id and kwargs, algo, seed, budget, agent).
-- ``metrics.csv``: one row per interaction (return, length, success, strategy, losses, time).
+- ``metrics.csv``: one row per interaction (return, length, success, whether it was played at
+  random, strategy, losses, time; :mod:`lili.metrics_file`).
 - ``tb/``: TensorBoard event files (tensorboardX).
 - ``checkpoints/``: the newest checkpoint ``ckpt_<n>/``, in two parts written apart: the agent
   (``agent.msgpack``: parameters, optimiser states, normaliser, config) and the stream
@@ -12,7 +13,9 @@
 
 Resuming (:func:`resume_run`) checks everything it reads (config, pointer, both checkpoint
 parts, and that ``metrics.csv`` still holds the rows the checkpoint logged, unedited) before
-anything in the folder is written.
+anything in the folder is written. A ``metrics.csv`` written before the ``random`` column
+existed resumes too: the logger rewrites it with the column (:func:`lili.metrics_file.
+random_column`).
 """
 
 from __future__ import annotations
@@ -34,13 +37,18 @@ import lili
 from lili.agents import CheckpointError, load_agent
 from lili.agents.sac import SAC
 from lili.config import stored_agent_config
-from lili.train import Stream, drawn_at_random
+from lili.metrics_file import (
+    METRIC_COLUMNS,
+    RANDOM,
+    left_out_of_policy,
+    metric_columns,
+    random_column,
+)
+from lili.train import Stream
 
 __all__ = ["RunLogger", "run_dir_for", "load_checkpoint", "METRIC_COLUMNS", "final_mean",
            "final_window", "latest_checkpoint", "read_run_config", "metric_columns",
            "resume_run", "check_out_dir"]
-
-METRIC_COLUMNS = ("critic_loss", "actor_loss", "alpha", "rep_loss", "q", "entropy")
 
 
 def check_out_dir(path: str | Path, flag: str = "--out") -> Path:
@@ -83,13 +91,6 @@ def _final(values: list[float] | np.ndarray) -> float | None:
     values = np.asarray(values, float)
     values = values[~np.isnan(values)]
     return final_mean(values) if values.size else None
-
-
-def metric_columns(strategy_dim: int) -> list[str]:
-    """The header of ``metrics.csv`` for an env whose strategy has ``strategy_dim`` entries."""
-    return (["interaction", "return", "length", "success"]
-            + [f"strategy_{j}" for j in range(strategy_dim)]
-            + ["strategy_id", *METRIC_COLUMNS, "wall_time"])
 
 
 def _git_commit() -> str | None:
@@ -171,7 +172,9 @@ def latest_checkpoint(run_dir: str | Path) -> tuple[Path, int]:
 
 def load_checkpoint(run_dir: str | Path, agent: SAC, stream: Stream) -> int:
     """Restore ``agent``'s state and ``stream`` from the run's latest checkpoint; return the
-    number of interactions it holds. CheckpointError naming the file on any mismatch."""
+    number of interactions it holds. CheckpointError naming the file on any mismatch. The
+    training loop attaches the stream to the agent when it goes on (:func:`lili.train.train`).
+    """
     ck, n = latest_checkpoint(run_dir)
     loaded = load_agent(ck / "agent.msgpack", agent.env)
     if loaded.algo != agent.algo:
@@ -189,20 +192,22 @@ def load_checkpoint(run_dir: str | Path, agent: SAC, stream: Stream) -> int:
                               f"stream holds {stream.count}, the agent "
                               f"{loaded.trained_interactions}")
     agent.state = loaded.state
-    agent.stream = stream
     return n
 
 
-def _read_rows(path: Path, columns: list[str]) -> list[list[str]]:
+def _read_rows(path: Path, columns: list[str]) -> tuple[list[list[str]], bool]:
+    """The rows of ``metrics.csv`` under its header ``columns``, and whether the file is one
+    written before the ``random`` column existed (then its rows lack that cell)."""
     try:
         with path.open(newline="") as f:
             rows = list(csv.reader(f))
     except OSError as e:
         raise CheckpointError(f"{path} cannot be read: {e}") from None
-    if not rows or rows[0] != columns:
+    legacy = [c for c in columns if c != RANDOM]
+    if not rows or rows[0] not in (columns, legacy):
         got = rows[0] if rows else "nothing"
         raise CheckpointError(f"{path} has columns {got}; expected {columns} (was it edited?)")
-    return rows[1:]
+    return rows[1:], rows[0] == legacy
 
 
 def _check_logged(path: Path, rows: list[list[str]], stream: Stream, n: int) -> None:
@@ -238,7 +243,7 @@ def resume_run(run_dir: str | Path, agent: SAC, stream: Stream,
         return 0
     n = load_checkpoint(run_dir, agent, stream)
     path = run_dir / "metrics.csv"
-    _check_logged(path, _read_rows(path, metric_columns(strategy_dim)), stream, n)
+    _check_logged(path, _read_rows(path, metric_columns(strategy_dim))[0], stream, n)
     return n
 
 
@@ -247,6 +252,8 @@ class RunLogger:
 
     Construct it only after every input is validated (:func:`resume_run` for a resume): it
     writes ``config.yaml``, cuts ``metrics.csv`` back to ``start`` rows and opens TensorBoard.
+    ``config`` is what ``config.yaml`` holds; on a resume of a file without the ``random``
+    column, that column is recomputed from it for the rows kept.
     """
 
     def __init__(self, run_dir: Path, config: dict[str, Any], strategy_dim: int,
@@ -257,7 +264,12 @@ class RunLogger:
         self.columns = metric_columns(strategy_dim)
         self.strategy_dim = strategy_dim
         path = self.dir / "metrics.csv"
-        rows = _read_rows(path, self.columns)[:start] if start > 0 else []
+        rows, legacy = _read_rows(path, self.columns) if start > 0 else ([], False)
+        rows = rows[:start]
+        if legacy:
+            at = self.columns.index(RANDOM)
+            drawn = random_column(config, len(rows))
+            rows = [r[:at] + [str(int(d))] + r[at:] for r, d in zip(rows, drawn, strict=True)]
         (self.dir / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
         with path.open("w", newline="") as f:
             w = csv.writer(f)
@@ -273,13 +285,14 @@ class RunLogger:
         success = self.columns.index("success")
         # One cell per interaction (NaN where the env reports none), aligned with the returns.
         self.successes = [float(r[success]) if r[success] != "" else math.nan for r in rows]
+        self.random = [r[self.columns.index(RANDOM)] == "1" for r in rows]
 
     def log(self, row: dict[str, Any], agent: SAC, stream: Stream) -> None:
         """Append one interaction's row; checkpoint every ``checkpoint_every`` interactions."""
         i = row["interaction"]
         success = row["success"]
         values = [i, f"{row['return']:.6g}", row["length"],
-                  "" if success is None else int(success)]
+                  "" if success is None else int(success), int(row["random"])]
         # An env that reports no strategy (or not on every interaction) leaves the cells empty.
         strategy = [f"{v:.6g}" for v in row["strategy"]][: self.strategy_dim]
         values += strategy + [""] * (self.strategy_dim - len(strategy))
@@ -289,6 +302,7 @@ class RunLogger:
         self._csv.writerow(values)
         self._csv_file.flush()
         self.returns.append(row["return"])
+        self.random.append(bool(row["random"]))
         self.tb.add_scalar("interaction/return", row["return"], i)
         self.successes.append(math.nan if success is None else float(success))
         if success is not None:
@@ -351,8 +365,7 @@ class RunLogger:
         cfg = agent.config
         if cfg.random_interactions <= 0:
             return {}
-        own = ~drawn_at_random(agent.seed, len(self.returns), cfg.warmup_interactions,
-                               cfg.random_interactions)
+        own = ~left_out_of_policy(np.asarray(self.random), cfg.warmup_interactions)
         return {"final_return_policy": _final(np.asarray(self.returns)[own]),
                 "final_success_policy": _final(np.asarray(self.successes)[own])}
 

@@ -23,9 +23,10 @@ import numpy as np
 
 from lili.agents.base import ActingState, Agent, CheckpointError
 from lili.buffer import InteractionBuffer
+from lili.metrics_file import plays_at_random
 
 __all__ = ["train", "rollout", "Interaction", "Stream", "NonFiniteError", "interaction_keys",
-           "plays_at_random", "drawn_at_random"]
+           "plays_at_random"]
 
 
 class NonFiniteError(ValueError):
@@ -95,26 +96,6 @@ def interaction_keys(seed: int, i: int) -> tuple[jax.Array, jax.Array]:
     """(acting key, update key) of interaction ``i``."""
     k = jax.random.fold_in(jax.random.PRNGKey(seed), i)
     return tuple(jax.random.split(k))  # type: ignore[return-value]
-
-
-def plays_at_random(seed: int, i: int, warmup: int, share: float) -> bool:
-    """Whether interaction ``i`` is played with uniform random actions: every warm-up
-    interaction, and after it each with probability ``share`` (``AgentConfig.
-    random_interactions``), decided from (seed, i) alone so that a resumed run and an
-    analysis of its records draw the same interactions."""
-    if i < warmup:
-        return True
-    return share > 0 and np.random.default_rng([seed, i, 1]).random() < share
-
-
-def drawn_at_random(seed: int, n: int, warmup: int, share: float) -> np.ndarray:
-    """Per interaction ``0..n-1``, whether it was played at random *after* the warm-up
-    (:func:`plays_at_random`): the interactions a report of the policy's own play leaves out.
-    The warm-up stays in, since it starts every run's curve. All False when ``share <= 0``."""
-    if share <= 0:
-        return np.zeros(n, bool)
-    return np.array([i >= warmup and plays_at_random(seed, i, warmup, share)
-                     for i in range(n)], bool)
 
 
 class Stream:
@@ -296,8 +277,9 @@ def train(
     try:
         for i in range(start, end):
             act_key, upd_key = interaction_keys(agent.seed, i)
-            if plays_at_random(agent.seed, i, cfg.warmup_interactions,
-                               cfg.random_interactions):
+            at_random = plays_at_random(agent.seed, i, cfg.warmup_interactions,
+                                        cfg.random_interactions)
+            if at_random:
                 rng = np.random.default_rng([agent.seed, i])
 
                 def act(o, s, rng=rng):
@@ -324,6 +306,7 @@ def train(
                 "return": done["ret"],
                 "length": done["length"],
                 "success": done["success"],
+                "random": at_random,
                 "strategy": done["strategy"],
                 "strategy_id": done["strategy_id"],
                 **metrics,
