@@ -13,8 +13,8 @@ from gymnasium import spaces
 import lili.envs  # noqa: F401 - registers the envs
 from lili.envs import OracleObservation, RepeatedInteractionEnv
 from lili.envs.checker import DEFAULT_INTERACTIONS, EnvContractError, check_env
-from lili.envs.spec import check_env_kwargs, env_kwarg_names, load_env_class, make_env
 from lili.envs.point_mass import PointMassEnv
+from lili.envs.spec import check_env_kwargs, env_kwarg_names, load_env_class, make_env
 
 
 class FlipPartner:

@@ -108,7 +108,7 @@ def test_save_load_round_trip(algo, runs, tmp_path):
     path = agent.save(tmp_path / "agent.msgpack")
     loaded = load_agent(path, Asymmetric())
     assert type(loaded) is type(agent) and loaded.algo == agent.algo
-    assert loaded.num_interactions == N
+    assert loaded.config == agent.config and loaded.num_interactions == N
     import jax
 
     same = jax.tree_util.tree_map(lambda a, b: bool(np.array_equal(a, b)), agent.state,
@@ -153,7 +153,7 @@ def test_actions_stay_in_the_env_bounds_and_shapes_hold(algo, runs):
     env = Asymmetric()
     rng = np.random.default_rng(0)
     state = agent.initial_state()
-    assert isinstance(state, ActingState)
+    assert isinstance(state, ActingState) and not np.asarray(state.z).any()
     for t in range(env.horizon):
         action, state = agent.predict(rng.normal(0, 3, agent.obs_dim).astype(np.float32),
                                       state, deterministic=False)
