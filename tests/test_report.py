@@ -427,6 +427,8 @@ def test_policy_only_leaves_out_the_interactions_played_at_random(tmp_path: Path
     plain = _write_run(tmp_path / "plain", DR, "sac", 0)
     (same,) = find_runs([plain], policy_only=True)
     assert np.array_equal(same.metrics["return"], find_runs([plain])[0].metrics["return"])
+    if not logged:
+        return  # the command line reads both kinds of file through find_runs: once is enough
     out = tmp_path / "report"
     assert main(["report", str(folder), "--policy-only", "--out", str(out)]) == 0
     assert "interactions the policy played" in (out / "results.md").read_text()

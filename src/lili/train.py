@@ -250,8 +250,10 @@ def train(
 ) -> list[dict[str, Any]]:
     """Train ``agent`` on ``stream`` for ``n_interactions`` more interactions.
 
-    ``callback(row)`` is called after every interaction with its metrics row; ``logger`` (a
-    :class:`lili.runs.RunLogger`) writes the run folder and checkpoints. Returns the rows.
+    ``callback(row)`` is called after every interaction with its metrics row (``random``
+    says whether it was played with uniform random actions, :func:`plays_at_random`);
+    ``logger`` (a :class:`lili.runs.RunLogger`) writes the run folder and checkpoints. Returns
+    the rows.
     Stops with :class:`NonFiniteError` at the first NaN or inf in an observation, a reward or a
     loss, before that interaction is logged or checkpointed (the last checkpoint stays good).
     """
