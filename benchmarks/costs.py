@@ -40,7 +40,7 @@ def measure_one(run: dict, timed: int) -> dict[str, float]:
     (a planned run's ``env``, ``algo``, ``env_kwargs`` and ``config``)."""
     from lili.agents import make_agent
     from lili.config import AgentConfig
-    from lili.envs.checker import load_env_class
+    from lili.envs.spec import load_env_class
     from lili.train import Stream, train
 
     env = load_env_class(run["env"])(**run["env_kwargs"])

@@ -48,9 +48,9 @@ from _results import RESULTS, check_result_name
 from drift_lagged import FrozenLatentObservation
 
 from lili.agents import load_agent
-from lili.envs.checker import load_env_class
 from lili.envs.influence import HELD, make_scripted
 from lili.envs.influence.drift import drifted
+from lili.envs.spec import load_env_class
 from lili.evaluate import Episodes
 from lili.play.policy import agent_file_for_run
 

@@ -12,15 +12,9 @@ from gymnasium import spaces
 
 import lili.envs  # noqa: F401 - registers the envs
 from lili.envs import OracleObservation, RepeatedInteractionEnv
-from lili.envs.checker import (
-    DEFAULT_INTERACTIONS,
-    EnvContractError,
-    check_env,
-    check_env_kwargs,
-    env_kwarg_names,
-    load_env_class,
-)
+from lili.envs.checker import DEFAULT_INTERACTIONS, EnvContractError, check_env
 from lili.envs.point_mass import PointMassEnv
+from lili.envs.spec import check_env_kwargs, env_kwarg_names, load_env_class, make_env
 
 
 class FlipPartner:
@@ -224,11 +218,6 @@ class Float64StrategyEnv(ToyEnv):
 @pytest.mark.parametrize(
     "env_or_factory",
     [
-        "lili/PointMass-v0",
-        "driving-2d",
-        "driving-steer",
-        "air-hockey",
-        PointMassEnv,
         functools.partial(PointMassEnv, step_noise=0.2, history=3),
         ToyEnv,
         DuckEnv,
@@ -236,6 +225,13 @@ class Float64StrategyEnv(ToyEnv):
 )
 def test_check_env_passes(env_or_factory: Any) -> None:
     assert check_env(env_or_factory) is None
+
+
+@pytest.mark.parametrize("env_or_factory", ["lili/PointMass-v0", "driving-2d", PointMassEnv])
+def test_check_env_takes_an_id_an_alias_or_a_class(env_or_factory: Any) -> None:
+    # Short: each library env's own test file checks it at the default length with warnings
+    # as errors (test_envs, test_driving_steer, test_air_hockey, ...); here only the forms.
+    assert check_env(env_or_factory, n_interactions=10) is None
 
 
 def test_check_env_accepts_an_instance_and_leaves_it_usable() -> None:
@@ -323,7 +319,16 @@ def test_never_varying_strategy_warns_that_leaks_were_not_checked() -> None:
         check_env(StuckEnv)
 
 
-# -- load_env_class ------------------------------------------------------------------------------
+# -- env specs (lili.envs.spec) ------------------------------------------------------------------
+
+
+def test_make_env_checks_the_options_by_name_then_builds() -> None:
+    env = make_env("point-mass", {"history": 2}, render_mode="rgb_array")
+    assert env.unwrapped.partner.votes.n == 2 and env.unwrapped.render_mode == "rgb_array"
+    with pytest.raises(ValueError, match="unknown env kwarg.s. 'lanes' for driving-2d"):
+        make_env("driving-2d", {"lanes": 4})
+    with pytest.raises(ValueError, match="^env point-mass: .*step_noise"):
+        make_env("point-mass", {"step_noise": -1.0})
 
 
 def test_load_env_class_resolves_module_class_and_ids() -> None:

@@ -1,7 +1,7 @@
 """The contract every agent keeps, parametrised over every algo (as Stable-Baselines3's tests
-run one list of models through the same checks): save/load round trip, same seed same numbers,
-resume equivalence, action bounds, predict shapes, a bad observation, and a run folder that the
-report reader reads back."""
+run one list of models through the same checks): save/load round trip, same seed same numbers
+and resume equivalence, another seed other numbers, action bounds, predict shapes, a bad
+observation, and a run folder that the report reader reads back."""
 
 from __future__ import annotations
 
@@ -108,7 +108,7 @@ def test_save_load_round_trip(algo, runs, tmp_path):
     path = agent.save(tmp_path / "agent.msgpack")
     loaded = load_agent(path, Asymmetric())
     assert type(loaded) is type(agent) and loaded.algo == agent.algo
-    assert loaded.num_interactions == N
+    assert loaded.config == agent.config and loaded.num_interactions == N
     import jax
 
     same = jax.tree_util.tree_map(lambda a, b: bool(np.array_equal(a, b)), agent.state,
@@ -122,16 +122,19 @@ def test_save_load_round_trip(algo, runs, tmp_path):
 
 
 @pytest.mark.parametrize("algo", ALGOS)
-def test_same_seed_same_numbers_other_seed_other_numbers(algo, runs, tmp_path):
+def test_other_seed_other_numbers(algo, runs, tmp_path):
+    """(The same seed giving the same numbers: the resume test below, whose fresh agents of
+    the same seed reproduce every number of the run.)"""
     base = _numbers(runs[0][algo][1])
-    again = _numbers(_run(algo, tmp_path)[1])
-    np.testing.assert_array_equal(np.asarray(base), np.asarray(again))
     other = _numbers(_run(algo, tmp_path, seed=1)[1])
     assert not np.array_equal(np.asarray(base)[:, 0], np.asarray(other)[:, 0])
 
 
 @pytest.mark.parametrize("algo", ALGOS)
 def test_resume_gives_the_numbers_of_an_uninterrupted_run(algo, runs, tmp_path):
+    """A fresh agent of the same seed plays the first interactions, another resumes from its
+    checkpoint: every number equals the uninterrupted run's (so the same seed gives the same
+    numbers, and resuming changes none)."""
     _, rows, folder = _run(algo, tmp_path, stop_at=3)
     np.testing.assert_array_equal(np.asarray(_numbers(rows)),
                                   np.asarray(_numbers(runs[0][algo][1])))
@@ -153,7 +156,9 @@ def test_actions_stay_in_the_env_bounds_and_shapes_hold(algo, runs):
     env = Asymmetric()
     rng = np.random.default_rng(0)
     state = agent.initial_state()
-    assert isinstance(state, ActingState)
+    assert isinstance(state, ActingState) and np.asarray(state.z).shape == (agent.latent_dim,)
+    if algo != "lilac":  # z^1 = 0; LILAC starts from its prior's mean (tests/test_lilac.py)
+        assert not np.asarray(state.z).any()
     for t in range(env.horizon):
         action, state = agent.predict(rng.normal(0, 3, agent.obs_dim).astype(np.float32),
                                       state, deterministic=False)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 import warnings
 from collections.abc import Callable
 
@@ -331,7 +330,7 @@ def test_alternating_sides_models_the_opponent_and_succeeds() -> None:
     assert rate >= 0.9
 
 
-# -- the backend interface and speed -------------------------------------------------------------
+# -- the backend interface (its speed: benchmarks/envs.py) ---------------------------------------
 
 
 class CountingBackend:
@@ -359,18 +358,3 @@ def test_any_steer_backend_plugs_in() -> None:
     run_interaction(env, constant(0.5))
     assert backend.targets == [0 if info["strategy_id"] == LEFT else SCENARIO.n_lanes - 1]
     assert backend.steers[0] == pytest.approx(0.5 * MAX_STEER)
-
-
-def test_at_least_300_steps_per_second() -> None:
-    env = gym.make(ENV_ID)
-    env.reset(seed=0)
-    actions = np.random.default_rng(0).uniform(-1, 1, size=(300, 1)).astype(np.float32)
-    rates = []
-    for _ in range(3):  # best of three: the machines are shared
-        start = time.perf_counter()
-        for a in actions:
-            _, _, terminated, truncated, _ = env.step(a)
-            if terminated or truncated:
-                env.reset()
-        rates.append(len(actions) / (time.perf_counter() - start))
-    assert max(rates) >= 300, f"{max(rates):.0f} steps/s"

@@ -13,7 +13,8 @@ SRC = Path(__file__).resolve().parent.parent / "src"
 
 # Layers from the bottom (DESIGN.md "Layout"): a module may import its own layer or lower ones.
 LAYERS = [
-    ("lili.envs", "lili.nets", "lili.dists", "lili.buffer", "lili.config", "lili.video"),
+    ("lili.envs", "lili.nets", "lili.dists", "lili.buffer", "lili.config", "lili.video",
+     "lili.metrics_file"),
     ("lili.agents",),
     ("lili.train", "lili.runs", "lili.evaluate"),
     ("lili.experiments", "lili.report", "lili.play"),

@@ -388,23 +388,34 @@ def test_upto_compares_runs_at_one_budget(tmp_path: Path) -> None:
     assert full["returns"] == [FINAL_RETURN[PM]["lili"][0], FINAL_RETURN[PM]["lili"][1]]
 
 
-def test_policy_only_leaves_out_the_interactions_played_at_random(tmp_path: Path) -> None:
+@pytest.mark.parametrize("logged", [True, False], ids=["random-column", "before-the-column"])
+def test_policy_only_leaves_out_the_interactions_played_at_random(tmp_path: Path,
+                                                                  logged: bool) -> None:
     from lili.cli import main
-    from lili.train import plays_at_random
+    from lili.metrics_file import plays_at_random
 
     # Interactions drawn at random return -1 (their strategy id 1), the policy's return +1 (id 0):
     # the policy's own final return is exactly 1, the run's as logged is lower.
     n, warmup, share = 200, 5, 0.5
-    drawn = [i >= warmup and plays_at_random(3, i, warmup, share) for i in range(n)]
-    # The columns `lili train` writes (a config with an agent section is checked against them).
-    rows = [HEADER.replace("wall_time", "q,entropy,wall_time")] + [
-        f"{i},{-1.0 if d else 1.0},50,{int(not d)},0.0,,{int(d)},,,,,,,{0.01 * i}"
-        for i, d in enumerate(drawn)]
+    played = [plays_at_random(3, i, warmup, share) for i in range(n)]
+    drawn = [i >= warmup and p for i, p in enumerate(played)]
+    # The columns `lili train` writes (a config with an agent section is checked against them):
+    # with the `random` column, or as written before it existed.
+    header = HEADER.replace("wall_time", "q,entropy,wall_time")
+    if logged:
+        header = header.replace("success,", "success,random,")
+    rows = [header] + [
+        f"{i},{-1.0 if d else 1.0},50,{int(not d)},{f'{int(p)},' if logged else ''}0.0,,"
+        f"{int(d)},,,,,,,{0.01 * i}" for i, (p, d) in enumerate(zip(played, drawn, strict=True))]
     folder = _write_run(tmp_path, DR, "lili", 3, n=n, csv="\n".join(rows) + "\n")
     config = yaml.safe_load((folder / "config.yaml").read_text())
-    config["agent"] = {"random_interactions": share, "warmup_interactions": warmup}
+    # Where the column is logged the report reads it, not the config: here the config names
+    # no random interactions, from which nothing could be recomputed.
+    config["agent"] = {"warmup_interactions": warmup,
+                       **({} if logged else {"random_interactions": share})}
     (folder / "config.yaml").write_text(yaml.safe_dump(config))
     (run,) = find_runs([tmp_path])
+    assert run.played_at_random.tolist() == played
     assert run.random_draws.tolist() == drawn and 0 < sum(drawn) < n - warmup
     assert final_performance(run) < 1.0
     (policy,) = find_runs([tmp_path], policy_only=True)
@@ -416,6 +427,8 @@ def test_policy_only_leaves_out_the_interactions_played_at_random(tmp_path: Path
     plain = _write_run(tmp_path / "plain", DR, "sac", 0)
     (same,) = find_runs([plain], policy_only=True)
     assert np.array_equal(same.metrics["return"], find_runs([plain])[0].metrics["return"])
+    if not logged:
+        return  # the command line reads both kinds of file through find_runs: once is enough
     out = tmp_path / "report"
     assert main(["report", str(folder), "--policy-only", "--out", str(out)]) == 0
     assert "interactions the policy played" in (out / "results.md").read_text()

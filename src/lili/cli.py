@@ -116,25 +116,16 @@ def _check_seed(seed: int, flag: str = "--seed") -> int:
 
 
 def _make_env(env_id: str, kwargs: dict[str, Any], render_mode: str | None = None):
-    from lili.envs.checker import check_env_kwargs, load_env_class
+    from lili.envs.spec import make_env
 
-    factory = load_env_class(env_id)
-    check_env_kwargs(factory, kwargs, env_id)
-    try:
-        if render_mode is not None:
-            kwargs = {**kwargs, "render_mode": render_mode}
-        return factory(**kwargs)
-    except TypeError as e:
-        raise UsageError(f"env {env_id} does not accept these kwargs {kwargs}: {e}") from None
-    except ValueError as e:  # the env's own check of a value, e.g. step_noise='abc'
-        raise UsageError(f"env {env_id}: {e}") from None
+    return make_env(env_id, kwargs, render_mode)
 
 
 def _resolve_env(spec: str) -> str:
     """The canonical name of an env spec: a registered id for an alias or id, else the
     ``MODULE:CLASS`` / ``module:namespace/Id-v0`` spec itself (checked by importing it)."""
     from lili.envs import ENV_ALIASES
-    from lili.envs.checker import load_env_class
+    from lili.envs.spec import load_env_class
 
     load_env_class(spec)  # ValueError naming the spec when it is not an env
     return ENV_ALIASES.get(spec, spec)
@@ -192,7 +183,6 @@ def cmd_train(args: argparse.Namespace) -> int:
     if remaining < 0:
         raise UsageError(f"--interactions {args.interactions} is below the {start} the run has "
                          "already done")
-    agent.stream = stream
     logger = RunLogger(run_dir, resolved, strategy_dim, config.checkpoint_every, start)
     print(f"training {args.algo} on {env_id} (seed {args.seed}) -> {run_dir}"
           + (f" (resumed at interaction {start})" if start else ""))
@@ -297,7 +287,8 @@ def cmd_results(args: argparse.Namespace) -> int:
 
 
 def cmd_check_env(args: argparse.Namespace) -> int:
-    from lili.envs.checker import MAX_INTERACTIONS, check_env, load_env_class
+    from lili.envs.checker import MAX_INTERACTIONS, check_env
+    from lili.envs.spec import load_env_class
 
     if not 2 <= args.interactions <= MAX_INTERACTIONS:
         raise UsageError(f"--interactions {args.interactions} is invalid; allowed: an integer in "

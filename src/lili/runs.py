@@ -1,7 +1,8 @@
 """Run folders: ``<out>/<env>/<algo>/seed_<k>/`` with config, metrics, TensorBoard, checkpoints.
 
 - ``config.yaml``: the resolved configuration (env id and kwargs, algo, seed, budget, agent).
-- ``metrics.csv``: one row per interaction (return, length, success, strategy, losses, time).
+- ``metrics.csv``: one row per interaction (return, length, success, whether it was played at
+  random, strategy, losses, time; :mod:`lili.metrics_file`).
 - ``tb/``: TensorBoard event files (tensorboardX): the numbers of ``metrics.csv``, written
   anew from it when a run resumes.
 - ``checkpoints/``: the newest checkpoint ``ckpt_<n>/``, in two parts written apart: the agent
@@ -13,7 +14,9 @@
 
 Resuming (:func:`resume_run`) checks everything it reads (config, pointer, both checkpoint
 parts, and that ``metrics.csv`` still holds the rows the checkpoint logged, unedited) before
-anything in the folder is written.
+anything in the folder is written. A ``metrics.csv`` written before the ``random`` column
+existed resumes too: the logger rewrites it with the column (:func:`lili.metrics_file.
+random_column`).
 """
 
 from __future__ import annotations
@@ -36,14 +39,19 @@ from lili.agents import CheckpointError, load_agent
 from lili.agents.sac import SAC
 from lili.config import AgentConfig, stored_agent_config
 from lili.errors import shown
-from lili.train import Stream, drawn_at_random
+from lili.metrics_file import (
+    METRIC_COLUMNS,
+    RANDOM,
+    left_out_of_policy,
+    metric_columns,
+    random_column,
+)
+from lili.train import Stream
 from lili.yaml_bounds import YAMLTooLarge, safe_load
 
 __all__ = ["RunLogger", "run_dir_for", "load_checkpoint", "METRIC_COLUMNS", "final_mean",
            "final_window", "latest_checkpoint", "read_run_config", "metric_columns",
            "resume_run", "check_out_dir", "load_run_agent"]
-
-METRIC_COLUMNS = ("critic_loss", "actor_loss", "alpha", "rep_loss", "q", "entropy")
 
 
 def check_out_dir(path: str | Path, flag: str = "--out") -> Path:
@@ -90,13 +98,6 @@ def _final(values: list[float] | np.ndarray) -> float | None:
     values = np.asarray(values, float)
     values = values[~np.isnan(values)]
     return final_mean(values) if values.size else None
-
-
-def metric_columns(strategy_dim: int) -> list[str]:
-    """The header of ``metrics.csv`` for an env whose strategy has ``strategy_dim`` entries."""
-    return (["interaction", "return", "length", "success"]
-            + [f"strategy_{j}" for j in range(strategy_dim)]
-            + ["strategy_id", *METRIC_COLUMNS, "wall_time"])
 
 
 def _git_commit() -> str | None:
@@ -196,7 +197,9 @@ def load_run_agent(ck: Path, run_dir: str | Path, env: Any, algo: str,
 
 def load_checkpoint(run_dir: str | Path, agent: SAC, stream: Stream) -> int:
     """Restore ``agent``'s state and ``stream`` from the run's latest checkpoint; return the
-    number of interactions it holds. CheckpointError naming the file on any mismatch."""
+    number of interactions it holds. CheckpointError naming the file on any mismatch. The
+    training loop attaches the stream to the agent when it goes on (:func:`lili.train.train`).
+    """
     ck, n = latest_checkpoint(run_dir)
     loaded = load_run_agent(ck, run_dir, agent.env, agent.algo, agent.config)
     try:
@@ -210,11 +213,12 @@ def load_checkpoint(run_dir: str | Path, agent: SAC, stream: Stream) -> int:
                               f"stream holds {stream.count}, the agent "
                               f"{loaded.trained_interactions}")
     agent.state = loaded.state
-    agent.stream = stream
     return n
 
 
-def _read_rows(path: Path, columns: list[str]) -> list[list[str]]:
+def _read_rows(path: Path, columns: list[str]) -> tuple[list[list[str]], bool]:
+    """The rows of ``metrics.csv`` under its header ``columns``, and whether the file is one
+    written before the ``random`` column existed (then its rows lack that cell)."""
     try:
         with path.open(newline="", encoding="utf-8") as f:
             rows = list(csv.reader(f))
@@ -223,10 +227,11 @@ def _read_rows(path: Path, columns: list[str]) -> list[list[str]]:
     except UnicodeDecodeError as e:
         raise CheckpointError(f"{path} is not UTF-8 text (byte {e.start}); restore the file or "
                               "start a new run") from None
-    if not rows or rows[0] != columns:
+    legacy = [c for c in columns if c != RANDOM]
+    if not rows or rows[0] not in (columns, legacy):
         got = shown(rows[0]) if rows else "nothing"
         raise CheckpointError(f"{path} has columns {got}; expected {columns} (was it edited?)")
-    return rows[1:]
+    return rows[1:], rows[0] == legacy
 
 
 def _check_logged(path: Path, rows: list[list[str]], stream: Stream, n: int) -> None:
@@ -262,7 +267,7 @@ def resume_run(run_dir: str | Path, agent: SAC, stream: Stream,
         return 0
     n = load_checkpoint(run_dir, agent, stream)
     path = run_dir / "metrics.csv"
-    _check_logged(path, _read_rows(path, metric_columns(strategy_dim)), stream, n)
+    _check_logged(path, _read_rows(path, metric_columns(strategy_dim))[0], stream, n)
     return n
 
 
@@ -271,6 +276,8 @@ class RunLogger:
 
     Construct it only after every input is validated (:func:`resume_run` for a resume): it
     writes ``config.yaml``, cuts ``metrics.csv`` back to ``start`` rows and opens TensorBoard.
+    ``config`` is what ``config.yaml`` holds; on a resume of a file without the ``random``
+    column, that column is recomputed from it for the rows kept.
     """
 
     def __init__(self, run_dir: Path, config: dict[str, Any], strategy_dim: int,
@@ -281,7 +288,12 @@ class RunLogger:
         self.columns = metric_columns(strategy_dim)
         self.strategy_dim = strategy_dim
         path = self.dir / "metrics.csv"
-        rows = _read_rows(path, self.columns)[:start] if start > 0 else []
+        rows, legacy = _read_rows(path, self.columns) if start > 0 else ([], False)
+        rows = rows[:start]
+        if legacy:
+            at = self.columns.index(RANDOM)
+            drawn = random_column(config, len(rows))
+            rows = [r[:at] + [str(int(d))] + r[at:] for r, d in zip(rows, drawn, strict=True)]
         (self.dir / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
         with path.open("w", newline="") as f:
             w = csv.writer(f)
@@ -304,6 +316,7 @@ class RunLogger:
             self._record(int(r[0]), float(r[1]),
                          None if r[success] == "" else float(r[success]),
                          {k: float(cells[k]) for k in METRIC_COLUMNS if cells.get(k, "") != ""})
+        self.random = [r[self.columns.index(RANDOM)] == "1" for r in rows]
 
     def _record(self, i: int, ret: float, success: float | bool | None,
                 metrics: dict[str, float]) -> None:
@@ -322,7 +335,7 @@ class RunLogger:
         i = row["interaction"]
         success = row["success"]
         values = [i, f"{row['return']:.6g}", row["length"],
-                  "" if success is None else int(success)]
+                  "" if success is None else int(success), int(row["random"])]
         # An env that reports no strategy (or not on every interaction) leaves the cells empty.
         strategy = [f"{v:.6g}" for v in row["strategy"]][: self.strategy_dim]
         values += strategy + [""] * (self.strategy_dim - len(strategy))
@@ -332,6 +345,7 @@ class RunLogger:
         self._csv.writerow(values)
         self._csv_file.flush()
         self._record(i, row["return"], success, {k: row[k] for k in METRIC_COLUMNS if k in row})
+        self.random.append(bool(row["random"]))
         if (i + 1) % self.checkpoint_every == 0:
             self.checkpoint(agent, stream)
 
@@ -387,8 +401,7 @@ class RunLogger:
         cfg = agent.config
         if cfg.random_interactions <= 0:
             return {}
-        own = ~drawn_at_random(agent.seed, len(self.returns), cfg.warmup_interactions,
-                               cfg.random_interactions)
+        own = ~left_out_of_policy(np.asarray(self.random), cfg.warmup_interactions)
         return {"final_return_policy": _final(np.asarray(self.returns)[own]),
                 "final_success_policy": _final(np.asarray(self.successes)[own])}
 

@@ -24,9 +24,10 @@ import numpy as np
 from lili.agents.base import ActingState, Agent, CheckpointError
 from lili.buffer import InteractionBuffer
 from lili.env_calls import env_reset, env_step, where
+from lili.metrics_file import plays_at_random
 
 __all__ = ["train", "rollout", "Interaction", "Stream", "NonFiniteError", "interaction_keys",
-           "plays_at_random", "drawn_at_random"]
+           "plays_at_random"]
 
 
 class NonFiniteError(ValueError):
@@ -98,26 +99,6 @@ def interaction_keys(seed: int, i: int) -> tuple[jax.Array, jax.Array]:
     """(acting key, update key) of interaction ``i``."""
     k = jax.random.fold_in(jax.random.PRNGKey(seed), i)
     return tuple(jax.random.split(k))  # type: ignore[return-value]
-
-
-def plays_at_random(seed: int, i: int, warmup: int, share: float) -> bool:
-    """Whether interaction ``i`` is played with uniform random actions: every warm-up
-    interaction, and after it each with probability ``share`` (``AgentConfig.
-    random_interactions``), decided from (seed, i) alone so that a resumed run and an
-    analysis of its records draw the same interactions."""
-    if i < warmup:
-        return True
-    return share > 0 and np.random.default_rng([seed, i, 1]).random() < share
-
-
-def drawn_at_random(seed: int, n: int, warmup: int, share: float) -> np.ndarray:
-    """Per interaction ``0..n-1``, whether it was played at random *after* the warm-up
-    (:func:`plays_at_random`): the interactions a report of the policy's own play leaves out.
-    The warm-up stays in, since it starts every run's curve. All False when ``share <= 0``."""
-    if share <= 0:
-        return np.zeros(n, bool)
-    return np.array([i >= warmup and plays_at_random(seed, i, warmup, share)
-                     for i in range(n)], bool)
 
 
 class Stream:
@@ -275,7 +256,8 @@ def train(
 
     ``callback(row) -> bool | None`` is called after every interaction (after the logger
     has written it) with its metrics row: ``interaction``, ``return``, ``length``,
-    ``success`` (None where the env reports none), ``strategy``, ``strategy_id``, the losses
+    ``success`` (None where the env reports none), ``random`` (whether it was played with
+    uniform random actions, :func:`plays_at_random`), ``strategy``, ``strategy_id``, the losses
     of the interaction's update once learning has started (``critic_loss``, ``actor_loss``,
     ``alpha``, ...) and ``wall_time``. Returning ``False`` stops training after that
     interaction, as a Stable-Baselines3 callback does; None (no return) or True goes on.
@@ -306,8 +288,9 @@ def train(
     try:
         for i in range(start, end):
             act_key, upd_key = interaction_keys(agent.seed, i)
-            if plays_at_random(agent.seed, i, cfg.warmup_interactions,
-                               cfg.random_interactions):
+            at_random = plays_at_random(agent.seed, i, cfg.warmup_interactions,
+                                        cfg.random_interactions)
+            if at_random:
                 rng = np.random.default_rng([agent.seed, i])
 
                 def act(o, s, rng=rng):
@@ -334,6 +317,7 @@ def train(
                 "return": done["ret"],
                 "length": done["length"],
                 "success": done["success"],
+                "random": at_random,
                 "strategy": done["strategy"],
                 "strategy_id": done["strategy_id"],
                 **metrics,

@@ -151,7 +151,7 @@ def _check_env_kwargs(specs: list[RunSpec], given: dict[str, Any]) -> None:
     """ValueError naming the env and the bad ``--env-kwarg`` unless every env of the plan takes
     the given options: checked by name, then by building the env once with the kwargs its
     runs will get, so that a bad value fails here and not in every run."""
-    from lili.envs.checker import check_env_kwargs, load_env_class
+    from lili.envs.spec import check_env_kwargs, load_env_class
 
     for env_id, kwargs in {s.env: s.env_kwargs for s in specs}.items():
         factory = load_env_class(env_id)

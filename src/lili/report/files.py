@@ -23,6 +23,7 @@ import numpy as np
 import yaml
 
 from lili.errors import shown
+from lili.metrics_file import RANDOM, left_out_of_policy, metric_columns, random_column, warmup_of
 from lili.report.style import algo_sort_key
 from lili.yaml_bounds import YAMLTooLarge, safe_load, yaml_problem
 
@@ -89,21 +90,22 @@ class Run:
         return np.stack([self.metrics[name] for _, name in cols], axis=1)
 
     @property
-    def random_draws(self) -> np.ndarray:
-        """Per interaction, whether training played it with uniform random actions after the
-        warm-up (``AgentConfig.random_interactions``), recomputed from ``config.yaml`` with
-        :func:`lili.train.drawn_at_random` as training drew them. All False without them."""
-        agent = self.config.get("agent")
-        agent = agent if isinstance(agent, dict) else {}
-        share = agent.get("random_interactions") or 0.0
-        n = self.n_interactions
-        if isinstance(share, bool) or not isinstance(share, (int, float)) or share <= 0:
-            return np.zeros(n, bool)
-        # Imported here: lili.train pulls in JAX, which reading CSV files does not need.
-        from lili.train import drawn_at_random
+    def played_at_random(self) -> np.ndarray:
+        """Per interaction, whether training played it with uniform random actions (the
+        warm-up, and the draws of ``AgentConfig.random_interactions``): the ``random`` column of
+        ``metrics.csv``, or for a file written before that column existed, the draws
+        recomputed from ``config.yaml`` (:func:`lili.metrics_file.random_column`)."""
+        column = self.metrics.get(RANDOM)
+        if column is None:
+            return random_column(self.config, self.n_interactions)
+        return column == 1
 
-        warmup = int(agent.get("warmup_interactions") or 0)
-        return drawn_at_random(self.seed, n, warmup, float(share))
+    @property
+    def random_draws(self) -> np.ndarray:
+        """Per interaction, whether training played it at random *after* the warm-up: what
+        :meth:`policy_only` leaves out (:func:`lili.metrics_file.left_out_of_policy`). All
+        False without ``random_interactions``."""
+        return left_out_of_policy(self.played_at_random, warmup_of(self.config))
 
     def policy_only(self) -> Run:
         """This run with the interactions played at random after the warm-up
@@ -240,10 +242,9 @@ def _check_rows(path: Path, interaction: np.ndarray) -> None:
 def _expected_columns(header: list[str]) -> list[str]:
     """The columns `lili train` writes (``lili.runs.RunLogger``), for this run's strategy size:
     as many ``strategy_<j>`` columns as the header has, none for an env that reports no
-    strategy (Pendulum-v1)."""
-    from lili.runs import metric_columns
-
-    return metric_columns(sum(1 for c in header if _STRATEGY_RE.match(c)))
+    strategy (Pendulum-v1); without ``random`` for a file written before that column existed."""
+    columns = metric_columns(sum(1 for c in header if _STRATEGY_RE.match(c)))
+    return columns if RANDOM in header else [c for c in columns if c != RANDOM]
 
 
 def _check_against_run(run: Run) -> None:

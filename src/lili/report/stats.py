@@ -324,7 +324,7 @@ def _env_strategy_names(env: str) -> tuple[str, ...]:
         import gymnasium as gym
         from gymnasium.envs.registration import load_env_creator
 
-        from lili.envs.checker import load_env_class
+        from lili.envs.spec import load_env_class
 
         factory = load_env_class(env)
         if isinstance(factory, functools.partial) and factory.func is gym.make:
