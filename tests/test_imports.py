@@ -15,7 +15,7 @@ SRC = Path(__file__).resolve().parent.parent / "src"
 LAYERS = [
     ("lili.envs", "lili.nets", "lili.dists", "lili.buffer", "lili.config", "lili.video"),
     ("lili.agents",),
-    ("lili.train", "lili.runs", "lili.evaluate"),
+    ("lili.train", "lili.many", "lili.runs", "lili.evaluate"),
     ("lili.experiments", "lili.report", "lili.play"),
     ("lili.cli",),
 ]
