@@ -16,7 +16,7 @@ LAYERS = [
     ("lili.envs", "lili.nets", "lili.dists", "lili.buffer", "lili.config", "lili.video",
      "lili.metrics_file"),
     ("lili.agents",),
-    ("lili.train", "lili.runs", "lili.evaluate"),
+    ("lili.train", "lili.many", "lili.runs", "lili.evaluate"),
     ("lili.experiments", "lili.report", "lili.play"),
     ("lili.cli",),
 ]

@@ -137,29 +137,38 @@ def _strategy_dim(env: Any) -> int:
     return int(shape[0]) if shape and len(shape) == 1 else 0
 
 
-def cmd_train(args: argparse.Namespace) -> int:
-    from lili.agents import ALGOS, check_extra, make_agent
-    from lili.config import AgentConfig, load_config
-    from lili.runs import RunLogger, read_run_config, resume_run, run_dir_for
-    from lili.train import Stream, train
+MAX_GROUP = 4096
+"""Most runs ``lili train --seeds`` trains in one program."""
 
-    env_id = _resolve_env(args.env)
-    if args.algo not in ALGOS:
-        raise UsageError(f"unknown algo {args.algo!r}; allowed: {', '.join(ALGOS)}")
-    _check_interactions(args.interactions)
-    _check_seed(args.seed)
-    from lili.runs import check_out_dir
 
-    check_out_dir(args.out, "--out")
-    if args.config:
-        _check_config_size(args.config)
-    config = load_config(args.config) if args.config else AgentConfig()
-    check_extra(config)
-    env_kwargs = _parse_kwargs(args.env_kwarg)
-    run_dir = run_dir_for(args.out, env_id, args.algo, args.seed)
-    resolved = {"env": env_id, "env_kwargs": env_kwargs, "algo": args.algo, "seed": args.seed,
+def _parse_seeds(spec: str) -> list[int]:
+    """``--seeds`` as a list: ``0-7`` (both ends included), ``0,3,5`` or a mix (``0-2,9``)."""
+    seeds: list[int] = []
+    bad = UsageError(f"--seeds {spec[:60]!r} is invalid; allowed: seeds and ranges such as "
+                     f"0-7 or 0,3,5 (at most {MAX_GROUP} seeds, each in [0, 2**32 - 1])")
+    for part in str(spec).split(","):
+        lo, dash, hi = part.strip().partition("-")
+        if not lo.isdigit() or (dash and not hi.isdigit()) or len(part) > 24:
+            raise bad
+        first, last = int(lo), int(hi) if dash else int(lo)
+        if last < first or last - first + 1 + len(seeds) > MAX_GROUP:
+            raise bad
+        seeds += range(first, last + 1)
+    if len(set(seeds)) != len(seeds):
+        raise UsageError(f"--seeds {spec[:60]!r} names a seed twice; allowed: distinct seeds")
+    for seed in seeds:
+        _check_seed(seed, "--seeds")
+    return seeds
+
+
+def _check_run_folder(args: argparse.Namespace, env_id: str, env_kwargs: dict[str, Any],
+                      config: Any, seed: int) -> tuple[Path, dict[str, Any]]:
+    """One seed's run folder and resolved config, checked against ``--resume``; writes nothing."""
+    from lili.runs import read_run_config, run_dir_for
+
+    run_dir = run_dir_for(args.out, env_id, args.algo, seed)
+    resolved = {"env": env_id, "env_kwargs": env_kwargs, "algo": args.algo, "seed": seed,
                 "interactions": args.interactions, "agent": config.to_dict()}
-
     exists = (run_dir / "metrics.csv").exists()
     if exists and not args.resume:
         raise UsageError(f"run folder {run_dir} already holds a run; pass --resume to continue "
@@ -172,43 +181,89 @@ def cmd_train(args: argparse.Namespace) -> int:
             if old.get(key) != resolved[key]:
                 raise UsageError(f"--resume: {key} differs from the run in {run_dir} "
                                  f"({old.get(key)!r} there, {resolved[key]!r} now)")
+    return run_dir, resolved
 
-    env = _make_env(env_id, env_kwargs)
-    agent = make_agent(args.algo, env, config, args.seed)
-    stream = Stream.for_agent(agent, agent.env)
-    strategy_dim = _strategy_dim(env)
-    # Everything is read and checked before the run folder is touched.
-    start = resume_run(run_dir, agent, stream, strategy_dim) if args.resume else 0
-    remaining = args.interactions - start
-    if remaining < 0:
-        raise UsageError(f"--interactions {args.interactions} is below the {start} the run has "
-                         "already done")
-    logger = RunLogger(run_dir, resolved, strategy_dim, config.checkpoint_every, start)
-    print(f"training {args.algo} on {env_id} (seed {args.seed}) -> {run_dir}"
-          + (f" (resumed at interaction {start})" if start else ""))
-    if strategy_dim == 0:
+
+def cmd_train(args: argparse.Namespace) -> int:
+    from lili.agents import ALGOS, check_extra, make_agent
+    from lili.config import AgentConfig, load_config
+    from lili.runs import RunLogger, check_out_dir, resume_run
+    from lili.train import Stream, train
+
+    env_id = _resolve_env(args.env)
+    if args.algo not in ALGOS:
+        raise UsageError(f"unknown algo {args.algo!r}; allowed: {', '.join(ALGOS)}")
+    _check_interactions(args.interactions)
+    seeds = _parse_seeds(args.seeds) if args.seeds is not None else [_check_seed(args.seed)]
+    check_out_dir(args.out, "--out")
+    if args.config:
+        _check_config_size(args.config)
+    config = load_config(args.config) if args.config else AgentConfig()
+    check_extra(config)
+    env_kwargs = _parse_kwargs(args.env_kwarg)
+    folders = [_check_run_folder(args, env_id, env_kwargs, config, seed) for seed in seeds]
+    envs = [_make_env(env_id, env_kwargs) for _ in seeds]
+    agents = [make_agent(args.algo, env, config, seed) for env, seed in zip(envs, seeds,
+                                                                            strict=True)]
+    if len(agents) > 1:
+        from lili.many import group_streams
+
+        try:  # before any buffer is allocated: a group too big for memory fails here
+            streams = group_streams(agents)
+        except ValueError as e:
+            raise UsageError(f"--seeds: {e}") from None
+    else:
+        streams = [Stream.for_agent(agents[0], agents[0].env)]
+    dim = _strategy_dim(envs[0])
+    runs = []
+    for (run_dir, resolved), agent, stream in zip(folders, agents, streams, strict=True):
+        start = resume_run(run_dir, agent, stream, dim) if args.resume else 0
+        if args.interactions < start:
+            raise UsageError(f"--interactions {args.interactions} is below the {start} the run "
+                             f"in {run_dir} has already done")
+        runs.append((agent, stream, run_dir, resolved, dim, start))
+    # Everything is read and checked before a run folder is touched.
+    loggers = [RunLogger(run_dir, resolved, dim, config.checkpoint_every, start)
+               for _, _, run_dir, resolved, dim, start in runs]
+    for (agent, _, run_dir, _, _, start) in runs:
+        print(f"training {args.algo} on {env_id} (seed {agent.seed}) -> {run_dir}"
+              + (f" (resumed at interaction {start})" if start else ""))
+    if runs[0][4] == 0:
         print(f"note: {env_id} reports no partner strategy (no strategy_space / "
               "info['strategy']): metrics.csv and reports will hold no strategy columns")
     try:
-        train(agent, stream, remaining, progress=not args.no_progress, logger=logger)
+        if len(runs) == 1:
+            train(agents[0], streams[0], args.interactions - runs[0][5],
+                  progress=not args.no_progress, logger=loggers[0])
+        else:
+            from lili.many import train_many
+
+            # Runs resumed at different points catch up alone first (train_many).
+            train_many(agents, streams, args.interactions - max(r[5] for r in runs),
+                       loggers, progress=not args.no_progress)
     except KeyboardInterrupt:
-        logger.close()
+        for logger in loggers:
+            logger.close()
+        done = min(s.count for s in streams)
         print(f"interrupted; resume with the same command and --resume (from interaction "
-              f"{stream.count // config.checkpoint_every * config.checkpoint_every})")
+              f"{done // config.checkpoint_every * config.checkpoint_every})")
         return 130
     except ValueError:
-        logger.close()
+        for logger in loggers:
+            logger.close()
         raise
-    summary = logger.finish(agent, stream, resolved)
-    line = f"final return (last 10%): {summary['final_return']:.3f}"
-    if summary["final_success"] is not None:
-        line += f", success {summary['final_success']:.2f}"
-    if summary.get("final_return_policy") is not None:
-        line += f" (the policy's own interactions: {summary['final_return_policy']:.3f}"
-        if summary["final_success_policy"] is not None:
-            line += f", success {summary['final_success_policy']:.2f}"
-        line += ")"
-    print(line + f"; wall time {summary['wall_time_s']:.0f} s")
+    for agent, stream, logger, run in zip(agents, streams, loggers, runs, strict=True):
+        summary = logger.finish(agent, stream, run[3])
+        line = (f"seed {agent.seed}: " if len(runs) > 1 else "") + \
+            f"final return (last 10%): {summary['final_return']:.3f}"
+        if summary["final_success"] is not None:
+            line += f", success {summary['final_success']:.2f}"
+        if summary.get("final_return_policy") is not None:
+            line += f" (the policy's own interactions: {summary['final_return_policy']:.3f}"
+            if summary["final_success_policy"] is not None:
+                line += f", success {summary['final_success_policy']:.2f}"
+            line += ")"
+        print(line + f"; wall time {summary['wall_time_s']:.0f} s")
     return 0
 
 
@@ -321,7 +376,11 @@ def build_parser() -> argparse.ArgumentParser:
     t = sub.add_parser("train", help="train an agent and write a run folder")
     t.add_argument("env", help="registered id (lili/PointMass-v0) or alias (point-mass)")
     t.add_argument("--algo", default="lili", help=f"one of {', '.join(ALGOS)} (default lili)")
-    t.add_argument("--seed", type=int, default=0)
+    seed = t.add_mutually_exclusive_group()
+    seed.add_argument("--seed", type=int, default=0)
+    seed.add_argument("--seeds", metavar="SEEDS",
+                      help="train several seeds together in one program, e.g. 0-7 or 0,3,5 "
+                           "(one run folder each; see README 'Many seeds')")
     t.add_argument("--interactions", type=int, default=2000, help="budget (default 2000)")
     t.add_argument("--out", default="runs/default", help="experiment folder (default runs/default)")
     t.add_argument("--config", help="YAML file with AgentConfig fields to change")

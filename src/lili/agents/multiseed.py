@@ -1,9 +1,8 @@
 """Many seeds in one program: the pure update block ``jax.vmap``-ed over stacked agent states.
 
-This is the path for accelerators, where one program that trains K seeds side by side keeps the
-device busy. On a CPU it gains nothing (measured on the 2-core machine: 3 seeds in one program
-took 2.84-2.88x the time of one), so the library's runs and ``lili reproduce`` train one seed per
-process there.
+The update half of :func:`lili.many.train_many` (``lili train --seeds``), which trains K runs
+that share one core together: one program keeps an accelerator busy, and on a CPU it saves the
+per-run dispatch of acting and updating; ``benchmarks/many_runs.py`` measures what it gains.
 
 Usage: build one agent per seed, each with its own buffer, then::
 
