@@ -14,9 +14,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from lili.agents.registry import PAPER_ALGOS
+
 __all__ = ["Group", "Preset", "PRESETS", "get_preset", "ALL_ALGOS"]
 
-ALL_ALGOS = ("sac", "slac", "lilac", "lili-no-influence", "lili", "oracle")
+ALL_ALGOS = PAPER_ALGOS  # the paper's algos, in the registry's order
 PM = "lili/PointMass-v0"
 NOISE = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)
 HISTORY = (1, 3, 5, 7, 9, 11)
