@@ -356,7 +356,7 @@ def extra_options(config: AgentConfig, key: str, defaults: dict[str, Any],
     unknown = sorted(set(raw) - set(defaults))
     if unknown:
         raise ValueError(f"unknown {label} option(s) {', '.join(map(repr, unknown))} in config "
-                         f"extra.{key}; allowed: {', '.join(defaults)}")
+                         f"extra.{key}; allowed: {', '.join(defaults) or 'none'}")
     return {**defaults, **raw}
 
 
