@@ -33,7 +33,7 @@ the second half's goals (whether the latent tells them apart among themselves; 0
 A fifth table plays 500 interactions of the agent's own policy with its exploration noise (as
 in training) and compares the latent's spread within one predicted goal with the distance
 between goals, in z and in what z predicts (the decoder's means at the probe inputs that
-``AgentConfig(critic_latent="prediction")`` gives the critic).
+``lili-prediction-critic`` gives the critic, ``lili.contrib.latents.decoder_predictions``).
 Prints the tables and writes ``benchmarks/results/<--name>.json``.
 """
 
@@ -48,6 +48,7 @@ from _results import RESULTS, check_result_name
 from drift_lagged import FrozenLatentObservation
 
 from lili.agents import load_agent
+from lili.contrib.latents import decoder_predictions, probe_inputs
 from lili.envs.influence import HELD, make_scripted
 from lili.envs.influence.drift import drifted
 from lili.envs.spec import load_env_class
@@ -224,10 +225,12 @@ def probe(run: str, n: int) -> dict:
         predicted["own_spacing"] = own_spacing(z[1:])
         # How much the latent moves within one predicted goal under training's noisy actions,
         # and how much what it predicts moves (the critic's code with
-        # critic_latent="prediction").
+        # lili-prediction-critic).
         zn, goals = noisy_latents(agent, env, min(n, 500))
         predicted["noisy_spread"] = spread(zn, goals)
-        code = agent.core.predictions(agent.state.model, np.asarray(zn, np.float32))
+        code = decoder_predictions(agent.core.decoder, agent.state.model["decoder"],
+                                   np.asarray(zn, np.float32),
+                                   *probe_inputs(agent.obs_dim, agent.act_dim))
         predicted["prediction_spread"] = spread(np.asarray(code), goals)
     return {"recall_per_strategy": recall, "predicted": predicted, "run": run,
             "algo": cfg["algo"],

@@ -17,7 +17,7 @@ def _err(capsys, argv):
 
 @pytest.mark.parametrize("argv, match", [
     (["train", "pong"], "unknown env 'pong'; allowed: air-hockey, driving-2d"),
-    (["train", "point-mass", "--algo", "ppo"], "unknown algo 'ppo'; allowed: sac, oracle"),
+    (["train", "point-mass", "--algo", "ppo"], "unknown algo 'ppo'; allowed: random, sac, slac"),
     (["train", "point-mass", "--interactions", "-5"], "--interactions -5 is invalid"),
     (["train", "point-mass", "--seed", "-1"], "--seed=-1 is invalid"),
     (["train", "point-mass", "--config", "/nonexistent.yaml"], "does not exist"),

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from gymnasium import spaces
 
-from lili.agents import ALGOS, ActingState, load_agent, make_agent
+from lili.agents import ActingState, load_agent, make_agent
+from lili.agents.registry import CORE_ALGOS as ALGOS  # the contrib algos: tests/test_contrib.py
 from lili.config import AgentConfig
 from lili.envs import RepeatedInteractionEnv
 from lili.report import load_run

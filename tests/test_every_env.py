@@ -14,7 +14,7 @@ import pytest
 import yaml
 
 from lili import cli
-from lili.agents import ALGOS
+from lili.agents.registry import CORE_ALGOS as ALGOS  # the contrib algos: tests/test_contrib.py
 from lili.envs import ENV_ALIASES
 
 SMALL = {

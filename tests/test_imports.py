@@ -16,6 +16,7 @@ LAYERS = [
     ("lili.envs", "lili.nets", "lili.dists", "lili.buffer", "lili.config", "lili.video",
      "lili.metrics_file"),
     ("lili.agents",),
+    ("lili.contrib",),
     ("lili.train", "lili.many", "lili.runs", "lili.evaluate"),
     ("lili.experiments", "lili.report", "lili.play"),
     ("lili.cli",),
@@ -83,7 +84,7 @@ def test_no_import_cycle():
 
 # The one upward edge: the facade's ``learn()`` (Stable-Baselines3's surface) hands over to the
 # training loop, imported when called; the loop itself depends only on lili.agents.base.
-ALLOWED_UP = {("lili.agents.sac", "lili.train")}
+ALLOWED_UP = {("lili.agents.facade", "lili.train")}
 
 
 def test_dependencies_point_down():
@@ -101,7 +102,31 @@ def test_the_training_loop_knows_agents_only_by_their_protocol():
         == {"lili.agents.base"}
 
 
-@pytest.mark.parametrize("module", ["lili.agents.sac", "lili.train", "lili.runs",
+def test_the_registry_names_every_algos_module_and_reading_it_imports_no_jax():
+    """The registry imports each algo's module by name (so contrib sits above the core it
+    subclasses): every name must be a module of the tree, and reading the table (for the
+    report's order and the presets) must not import JAX."""
+    from lili.agents.registry import TABLE
+
+    files = set(_graph())
+    assert {a.module for a in TABLE} <= files
+    assert {a.module for a in TABLE if a.module.startswith("lili.contrib")}
+    code = ("import sys; from lili.agents.registry import ALGOS, PAPER_ALGOS; "
+            "assert 'jax' not in sys.modules, 'jax imported'")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+
+
+def test_core_agents_do_not_import_contrib_or_each_other_for_shared_pieces():
+    graph = _graph()
+    assert not {n for m, deps in graph.items() if m.startswith("lili.agents")
+                for n in deps if n.startswith("lili.contrib")}
+    assert "lili.agents.lili" not in graph["lili.agents.lilac"]  # both use lili.agents.latent
+
+
+@pytest.mark.parametrize("module", ["lili.agents.sac", "lili.agents.registry",
+                                    "lili.contrib.latents", "lili.train", "lili.runs",
                                     "lili.evaluate", "lili.cli"])
 def test_module_imports_first_in_a_fresh_interpreter(module):
     out = subprocess.run([sys.executable, "-c", f"import {module}"], capture_output=True,

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from _old_configs import drop_new_agent_fields
+from _old_configs import add_retired_fields, drop_new_agent_fields
 
 from lili.cli import main
 from lili.experiments import PRESETS, get_preset, plan, run_status
@@ -219,6 +219,9 @@ def test_a_run_written_before_new_agent_fields_counts_as_done(tmp_path: Path) ->
     (spec,) = plan(get_preset("point-mass"), tmp_path, quick=True, algos=("lili",))
     _fake_run(spec, spec.interactions, spec.interactions)
     cfg = drop_new_agent_fields(yaml.safe_load((spec.run_dir / "config.yaml").read_text()))
+    (spec.run_dir / "config.yaml").write_text(yaml.safe_dump(cfg))
+    assert run_status(spec) == "done"
+    cfg = add_retired_fields(yaml.safe_load((spec.run_dir / "config.yaml").read_text()))
     (spec.run_dir / "config.yaml").write_text(yaml.safe_dump(cfg))
     assert run_status(spec) == "done"
 

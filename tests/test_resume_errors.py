@@ -10,7 +10,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import yaml
-from _old_configs import drop_new_agent_fields
+from _old_configs import add_retired_fields, drop_new_agent_fields
 from gymnasium import spaces
 
 from lili import cli
@@ -130,11 +130,32 @@ def test_a_run_written_before_new_config_fields_resumes(run, tmp_path, capsys):
     _, args = _broken_copy(run, tmp_path / "other", lambda f: None)
     path = Path(args[args.index("--config") + 1])
     other = tmp_path / "other.yaml"
-    other.write_text(yaml.safe_dump({**yaml.safe_load(path.read_text()),
-                                     "latent_kind": "categorical"}))
+    other.write_text(yaml.safe_dump({**yaml.safe_load(path.read_text()), "rep_weight": 0.5}))
     args[args.index("--config") + 1] = str(other)
     assert cli.main(args) == 2
     assert "agent differs" in capsys.readouterr().err
+
+
+def _add_retired_fields(folder, **values):
+    path = folder / "config.yaml"
+    path.write_text(yaml.safe_dump(add_retired_fields(yaml.safe_load(path.read_text()),
+                                                      **values)))
+
+
+def test_a_run_with_the_fields_now_in_contrib_resumes_or_names_the_algo(run, tmp_path, capsys):
+    """s20-s24 wrote latent_kind etc.: at their defaults the run resumes; a variant's value
+    stops with one line naming the contrib algo, before anything is written."""
+    folder, args = _broken_copy(run, tmp_path, _add_retired_fields)
+    assert cli.main(args) == 0
+    assert "resumed at interaction 6" in capsys.readouterr().out
+    folder, args = _broken_copy(run, tmp_path / "categorical",
+                                lambda f: _add_retired_fields(f, latent_kind="categorical"))
+    before = (folder / "metrics.csv").read_bytes()
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    assert "latent_kind='categorical' moved to lili.contrib: use --algo lili-categorical" in err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert (folder / "metrics.csv").read_bytes() == before
 
 
 class _Still:

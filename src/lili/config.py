@@ -1,3 +1,4 @@
+# Over 400 lines: each AgentConfig field is checked here, beside the YAML rules it is read by.
 """Agent configuration: one dataclass for every agent, validated on construction.
 
 Defaults follow the paper's appendix (encoder and decoder 2x128, latent 8, actor and critic 2x256)
@@ -15,13 +16,15 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import yaml
 
+T = TypeVar("T")
+
 __all__ = ["check_seed", "MAX_SEED", "AgentConfig", "load_config", "read_yaml", "yaml_value",
-           "BOUNDARY_DISCOUNTS", "BOUNDARY_MODES", "LATENT_KINDS", "LATENT_TARGETS",
-           "extra_options", "stored_agent_config"]
+           "BOUNDARY_DISCOUNTS", "BOUNDARY_MODES", "RETIRED_FIELDS", "extra_options",
+           "dataclass_options", "stored_agent_config"]
 
 MAX_SEED = 2**32 - 1
 """Largest seed: NumPy's and JAX's generators take 32-bit seeds without folding them."""
@@ -36,28 +39,36 @@ def check_seed(seed: Any, name: str = "seed") -> int:
     return int(seed)
 
 BOUNDARY_MODES = ("bootstrap", "influence", "cut", "same_z")
-LATENT_KINDS = ("continuous", "categorical", "quantised")
 BOUNDARY_DISCOUNTS = ("step", "horizon")
-LATENT_TARGETS = ("decoder", "posterior")
-CRITIC_LATENTS = ("latent", "prediction")
 # String fields with a fixed set of values: name -> (values, how the error message joins them).
-_CHOICES = {"boundary_discount": (BOUNDARY_DISCOUNTS, " or "), "latent_kind": (LATENT_KINDS, ", "),
-            "latent_target": (LATENT_TARGETS, " or "), "critic_latent": (CRITIC_LATENTS, " or ")}
+_CHOICES = {"boundary_discount": (BOUNDARY_DISCOUNTS, " or ")}
+
+RETIRED_FIELDS: dict[str, tuple[Any, str | dict[str, str] | tuple[str, str]]] = {
+    "latent_kind": ("continuous", {"categorical": "lili-categorical",
+                                   "quantised": "lili-quantised"}),
+    "latent_target": ("decoder", {"posterior": "lili-posterior"}),
+    "critic_latent": ("latent", {"prediction": "lili-prediction-critic"}),
+    "latent_bottleneck": (0.0, ("lili-bottleneck", "weight")),
+    "latent_balance": (1.0, ("lili-categorical", "balance")),
+    "latent_codes": (16, ("lili-quantised", "codes")),
+    "boundary_gamma": (None, "was removed; boundary_discount='horizon' took its place"),
+}
+"""Fields of earlier releases, which run folders' config.yaml still hold: name -> (the value
+they ran with by default, where the other values went: a value -> contrib algo mapping, the
+contrib algo and option that took the field, or a note). :meth:`AgentConfig.from_dict` drops
+them at their default and refuses any other value with one message naming what to use."""
 
 
 @dataclass(frozen=True)
 class AgentConfig:
     """Hyperparameters of every agent (fields irrelevant to an agent are ignored by it).
 
+    The variants of LILI that measured no gain take their options from ``extra`` under their
+    algo name (:mod:`lili.contrib`); the fields they once had here are :data:`RETIRED_FIELDS`.
+
     Attributes:
         gamma: per-step discount, applied across interaction boundaries too (the stream of
             interactions goes on; 0.99**50 = 0.6 per Point Mass interaction).
-        boundary_gamma: the discount of an interaction's last step only, the one whose target
-            reaches into the next interaction (None = ``gamma``, the paper). Sets how much the
-            next interaction's value weighs without discounting the rewards within one;
-            0 gives the last step y = r, as ``boundary="cut"``. Measured on Lunar Lander,
-            where the pad does not depend on the ego and bootstrapping across the boundary
-            costs LILI against LILI (no influence) (``docs/journal/2026-11-to-12.md``).
         boundary_discount: how far away the next interaction is when one ends early.
             ``step`` (the paper): every step discounts by ``gamma``, so an interaction that
             ends at step t < H reaches the next one H - 1 - t steps sooner, and an agent that
@@ -75,51 +86,6 @@ class AgentConfig:
         hidden: actor and critic hidden widths (paper: 2x256).
         enc_hidden: encoder and decoder hidden widths (paper: 2x128).
         latent_dim: size of z (paper: 8).
-        latent_kind: ``continuous`` (the paper: z is the encoder's linear output),
-            ``quantised`` (see ``latent_codes``) or ``categorical`` (z is the one-hot of the
-            encoder's largest output, trained by the straight-through estimator: forward the
-            one-hot, backward the softmax's gradient), so that z names one of ``latent_dim``
-            strategies. Measured on
-            ``lili/InfluenceDrift-v0``, where a policy learns to influence from the partner's
-            predicted goal given as indicators but not from LILI's continuous latent
-            (``docs/journal/2026-11-to-12.md``, "Drift: what a lagged agent needs to influence").
-        latent_balance: with a categorical latent, the weight in J_rep of log K - H of the
-            batch's mean category probabilities (0 = off), which keeps the encoder from
-            sending every interaction to one category (``lili.agents.lili.category_imbalance``).
-        latent_codes: with ``latent_kind="quantised"``, the size of the codebook: z is the
-            codebook vector nearest to E's output (straight-through gradient), and J_rep
-            gains the vector-quantisation losses |sg(e) - z|^2 + 0.25 |e - sg(z)|^2, which
-            pull the codes to the outputs they name and the outputs to their codes. Unlike
-            the categorical latent nothing spreads the batch over the codes, so the outputs
-            of one strategy can share one code: z is then exactly the same vector every time.
-        latent_bottleneck: with a continuous latent, the weight beta of an information
-            bottleneck on z (0 = off, the paper): the decoder reads z + eps, eps ~ N(0, I), and
-            J_rep gains beta * |z|^2 / 2, the KL of N(z, I) from N(0, I) (a variational
-            bottleneck with unit posterior variance, as PEARL's KL on its task latent). Actor,
-            critic and acting use z itself. What z carries beyond the partner's next
-            strategy then costs J_rep without helping the decoder, so it shrinks: the spread
-            of z within one strategy, which on Drift stops a policy from learning to
-            influence (``docs/journal/2026-11-to-12.md``, "Drift: a bottlenecked latent").
-        latent_target: what trains the encoder E. ``decoder`` (the paper): D(s, a, z^i)
-            predicts tau^i's transitions from z^i = E(tau^{i-1}). ``posterior``: a second
-            encoder P reads tau^i itself, D predicts tau^i from P(tau^i), and E is regressed
-            onto P(tau^i) (squared error, P detached), so z^i is the expected code of the
-            interaction to come. Both make z carry the next strategy; with ``posterior`` every
-            interaction that predicts the same next interaction has one target wherever it
-            came from, where with ``decoder`` any z that D decodes alike will do, so a rare
-            interaction (the one that influences) may be encoded off the latents of the
-            common ones and the critic must extrapolate its value. ``latent_bottleneck`` then
-            applies to P's code.
-        critic_latent: what of the partner the critic reads. ``latent`` (the paper): z itself.
-            ``prediction``: what z predicts, the decoder's means D(s_p, a_p, z) at 16 fixed
-            probe inputs (normalised states drawn from N(0, I) and actions from U(-1, 1) with
-            a fixed generator), detached, so the critic loss no longer shapes E
-            (``critic_to_encoder`` is then ignored). Two latents that the decoder reads alike
-            are then one critic input, however far apart they lie in z: on Drift a learned z
-            moves within one predicted strategy by about half the distance between strategies,
-            and a critic that reads a code which moves that much does not learn to influence
-            (``docs/journal/2026-11-to-12.md``, "Drift: the noise stops SAC through the
-            critic"). The actor and acting still read z.
         history: number of past interactions the encoder reads (1 = the paper's LILI).
         batch_interactions, per_interaction: a batch is ``batch_interactions`` interactions
             with ``per_interaction`` transitions each (32 x 8 = 256, as in LILI's code), drawn
@@ -175,7 +141,6 @@ class AgentConfig:
     """
 
     gamma: float = 0.99
-    boundary_gamma: float | None = None
     boundary_discount: str = "step"
     tau: float = 0.005
     lr_actor: float = 3e-4
@@ -186,12 +151,6 @@ class AgentConfig:
     hidden: tuple[int, ...] = (256, 256)
     enc_hidden: tuple[int, ...] = (128, 128)
     latent_dim: int = 8
-    latent_kind: str = "continuous"
-    latent_balance: float = 1.0
-    latent_codes: int = 16
-    latent_bottleneck: float = 0.0
-    latent_target: str = "decoder"
-    critic_latent: str = "latent"
     history: int = 1
     batch_interactions: int = 32
     per_interaction: int = 8
@@ -219,9 +178,6 @@ class AgentConfig:
         if self.target_entropy is not None:
             _set(self, "target_entropy", _number(self, "target_entropy", _ANY,
                                                  "a finite number or null (= -|A|)"))
-        if self.boundary_gamma is not None:
-            _set(self, "boundary_gamma", _number(self, "boundary_gamma", lambda v: 0 <= v < 1,
-                                                 "a number in [0, 1) or null (= gamma)"))
         if self.encoder_transitions is not None:
             _set(self, "encoder_transitions",
                  _integer(self, "encoder_transitions", 1, " or null (= all)"))
@@ -251,12 +207,6 @@ class AgentConfig:
             value = getattr(self, name)
             if not isinstance(value, str) or value not in choices:
                 raise _bad(self, name, sep.join(choices))
-        if self.latent_target == "posterior" and self.latent_kind != "continuous":
-            raise _bad(self, "latent_target", "decoder with latent_kind="
-                       f"{self.latent_kind!r} (a posterior target is for a continuous latent)")
-        if self.latent_bottleneck > 0 and self.latent_kind != "continuous":
-            raise _bad(self, "latent_bottleneck", "0 with latent_kind="
-                       f"{self.latent_kind!r} (the bottleneck is for a continuous latent)")
         _check_extra_shape(self.extra)
 
     @classmethod
@@ -264,6 +214,10 @@ class AgentConfig:
         """Build from a mapping; unknown keys are an error that names them and the allowed ones."""
         if not isinstance(d, dict):
             raise ValueError(f"config must be a mapping of field: value; got {type(d).__name__}")
+        for name in RETIRED_FIELDS:  # in its order: the variant's name before its options
+            if name in d:
+                _check_retired(name, d[name])
+        d = {k: v for k, v in d.items() if k not in RETIRED_FIELDS}
         names = {f.name for f in fields(cls)}
         unknown = sorted(set(d) - names)
         if unknown:
@@ -282,13 +236,38 @@ class AgentConfig:
         return dataclasses.replace(self, **changes)
 
 
+def _check_retired(name: str, value: Any) -> None:
+    """Nothing when the retired field ``name`` holds its old default; else ValueError naming
+    where it went."""
+    default, went = RETIRED_FIELDS[name]
+    if value is default or (not isinstance(value, bool) and value == default):
+        return
+    if isinstance(went, str):
+        raise ValueError(f"config {name}={value!r} is no longer supported: the field {went}")
+    if isinstance(went, tuple):
+        algo, option = went
+        raise ValueError(f"config {name}={value!r} moved to lili.contrib: use --algo {algo} with "
+                         f"extra: {{{algo}: {{{option}: {value!r}}}}}")
+    if isinstance(value, str) and value in went:
+        raise ValueError(f"config {name}={value!r} moved to lili.contrib: use --algo "
+                         f"{went[value]}")
+    raise ValueError(f"config {name}={value!r} is invalid: the field was removed (its default "
+                     f"{default!r} is what every agent does; the other values are the algos "
+                     f"{', '.join(went.values())})")
+
+
 def stored_agent_config(stored: Any) -> Any:
     """A run folder's stored agent config (``config.yaml``'s ``agent``) with the fields added
     since it was written set to their defaults, which are what it ran with (every new field
     defaults to the behaviour before it): so a run of an earlier release resumes and counts as
-    done. Returned unchanged when it is not a valid config, for the caller to report."""
+    done. Returned unchanged when it is not a valid config, for the caller to report; ValueError
+    naming the contrib algo to use when it ran a variant that has left the core
+    (:data:`RETIRED_FIELDS`)."""
     if not isinstance(stored, dict):
         return stored
+    for name in RETIRED_FIELDS:
+        if name in stored:
+            _check_retired(name, stored[name])
     try:
         return AgentConfig.from_dict(stored).to_dict()
     except (ValueError, TypeError):
@@ -330,13 +309,13 @@ _NUMBERS: dict[str, tuple[Callable[[float], bool], str]] = {
         "lr_actor", "lr_critic", "lr_alpha", "lr_encoder", "lr_decoder", "updates_per_step",
         "init_alpha")},
     **{name: ((lambda v: v >= 0), "a finite number >= 0") for name in (
-        "critic_to_encoder", "rep_weight", "latent_balance", "latent_bottleneck")},
+        "critic_to_encoder", "rep_weight")},
     "random_interactions": (lambda v: 0 <= v <= 1, "a number in [0, 1]"),
 }
 """Number fields: (test, what is allowed). Every number must also be finite and not a bool."""
 
 _INTEGERS: dict[str, int] = {
-    "latent_dim": 1, "latent_codes": 2, "history": 1, "batch_interactions": 1, "per_interaction": 1,
+    "latent_dim": 1, "history": 1, "batch_interactions": 1, "per_interaction": 1,
     "warmup_interactions": 2, "buffer_capacity": 2, "checkpoint_every": 1,
 }
 """Integer fields and their lower bounds (``buffer_capacity`` has a further one)."""
@@ -355,6 +334,14 @@ def _check_extra_shape(extra: Any) -> None:
                              "option name: value")
 
 
+def dataclass_options(config: AgentConfig, key: str, cls: type[T]) -> T:
+    """An agent's own options as the frozen dataclass ``cls``, from ``config.extra[key]``
+    (the fields not given keep their defaults); ValueError naming ``extra.<key>`` and the
+    allowed names or the bad value (``cls.__post_init__`` checks the values)."""
+    defaults = {f.name: f.default for f in fields(cls)}
+    return cls(**extra_options(config, key, defaults, key))
+
+
 def extra_options(config: AgentConfig, key: str, defaults: dict[str, Any],
                   label: str) -> dict[str, Any]:
     """An agent's own options: ``config.extra[key]`` over ``defaults``, keys checked.
@@ -369,7 +356,7 @@ def extra_options(config: AgentConfig, key: str, defaults: dict[str, Any],
     unknown = sorted(set(raw) - set(defaults))
     if unknown:
         raise ValueError(f"unknown {label} option(s) {', '.join(map(repr, unknown))} in config "
-                         f"extra.{key}; allowed: {', '.join(defaults)}")
+                         f"extra.{key}; allowed: {', '.join(defaults) or 'none'}")
     return {**defaults, **raw}
 
 

@@ -31,7 +31,7 @@ class Episodes:
                  key_seed: int | None = None) -> None:
         """``seed`` starts the env's sequence; ``key_seed`` (default ``seed``) the actions'
         noise when ``deterministic`` is False."""
-        self.agent, self.env, self.deterministic = agent, agent._wrap(env), deterministic
+        self.agent, self.env, self.deterministic = agent, agent.wrap_env(env), deterministic
         self.buffer = InteractionBuffer(max(2, agent.history + 1), agent.horizon, agent.obs_dim,
                                         agent.act_dim)
         self.key = jax.random.PRNGKey(seed if key_seed is None else key_seed)

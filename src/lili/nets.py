@@ -10,24 +10,7 @@ import jax.numpy as jnp
 
 from lili.dists import soft_clip_log_std
 
-__all__ = ["MLP", "Actor", "TwinCritic", "Encoder", "QuantisedEncoder", "Decoder",
-           "straight_through_one_hot", "nearest_code"]
-
-
-def straight_through_one_hot(logits: jax.Array) -> jax.Array:
-    """The one-hot of ``logits``' largest entry, with the softmax's gradient (Bengio et al.
-    2013's straight-through estimator): the forward value is exactly one-hot, so everything
-    downstream sees one of ``logits.shape[-1]`` names, while the encoder still learns."""
-    soft = jax.nn.softmax(logits, axis=-1)
-    hard = jax.nn.one_hot(jnp.argmax(logits, axis=-1), logits.shape[-1], dtype=soft.dtype)
-    return soft + jax.lax.stop_gradient(hard - soft)
-
-
-def nearest_code(e: jax.Array, codebook: jax.Array) -> jax.Array:
-    """The codebook row [K, L] nearest to each of ``e`` [..., L] (squared distance), without
-    gradient to ``e``: vector quantisation (van den Oord et al. 2017)."""
-    d = ((e[..., None, :] - codebook) ** 2).sum(-1)
-    return codebook[jnp.argmin(d, axis=-1)]
+__all__ = ["MLP", "Actor", "TwinCritic", "Encoder", "Decoder"]
 
 
 class MLP(nn.Module):
@@ -97,21 +80,6 @@ class Encoder(nn.Module):
         pooled = (h * w).sum(-2) / jnp.maximum(w.sum(-2), 1e-6)
         pooled = pooled.reshape(*pooled.shape[:-2], -1)
         return nn.Dense(self.latent_dim)(pooled)
-
-
-class QuantisedEncoder(nn.Module):
-    """:class:`Encoder` plus a codebook of ``codes`` vectors (the parameter ``codebook``
-    [codes, latent_dim], read by the caller), so that a Polyak copy of the encoder carries its
-    codebook along. Returns the encoder's output before quantisation."""
-
-    hidden: Sequence[int]
-    latent_dim: int
-    codes: int
-
-    @nn.compact
-    def __call__(self, x: jax.Array, weight: jax.Array) -> jax.Array:
-        self.param("codebook", nn.initializers.normal(0.5), (self.codes, self.latent_dim))
-        return Encoder(self.hidden, self.latent_dim)(x, weight)
 
 
 class Decoder(nn.Module):

@@ -1,26 +1,38 @@
-"""Agents. Every agent is the SAC core of :mod:`lili.agents.sac` plus, for some, a latent.
+"""Agents. Every agent is the SAC core of :mod:`lili.agents.core` plus, for some, a latent.
 
 Each name here is a Stable-Baselines3-style facade (``SAC(env).learn(n).save(p)``) over a core
-of pure functions (``agent.core``); see :mod:`lili.agents.base` for the shared types.
+of pure functions (``agent.core``); see :mod:`lili.agents.base` for the shared types and
+:mod:`lili.agents.registry` for the one ordered list of algos. The names are imported on first
+use, so that reading the registry (the report, ``lili reproduce --dry-run``) imports no JAX.
 """
 
 from __future__ import annotations
 
-from lili.agents.base import ActingState, AgentState, CheckpointError, check_seed
-from lili.agents.lilac import LILAC
-from lili.agents.lili import LILI
-from lili.agents.random_policy import RandomPolicy
-from lili.agents.sac import AGENTS, SAC, Oracle, check_config, check_extra, load_agent, make_agent
-from lili.agents.slac import SLAC
+import importlib
+from typing import Any
 
 __all__ = ["SAC", "Oracle", "LILI", "LILAC", "ALGOS", "make_agent", "load_agent", "check_config",
-           "CheckpointError",
-           "ActingState", "AgentState", "LatentState", "SLAC", "RandomPolicy", "check_seed",
-           "check_extra"]
+           "CheckpointError", "ActingState", "AgentState", "LatentState", "SLAC", "RandomPolicy",
+           "check_seed", "check_extra"]
 
-LatentState = ActingState  # the name of earlier releases
+_HOME = {
+    "SAC": "lili.agents.sac", "Oracle": "lili.agents.oracle", "LILI": "lili.agents.lili",
+    "LILAC": "lili.agents.lilac", "SLAC": "lili.agents.slac",
+    "RandomPolicy": "lili.agents.random_policy",
+    **dict.fromkeys(("ALGOS", "make_agent", "load_agent", "check_config", "check_extra"),
+                    "lili.agents.registry"),
+    **dict.fromkeys(("CheckpointError", "ActingState", "AgentState", "check_seed"),
+                    "lili.agents.base"),
+}
 
-ALGOS = ("sac", "oracle", "lili", "lili-no-influence", "lilac", "slac", "random",
-         "oracle-last")
-"""Every algo name (``lili train --algo``), in the order reports list them."""
-assert set(ALGOS) == set(AGENTS), "every agent module registers its algo names"
+
+def __getattr__(name: str) -> Any:
+    if name == "LatentState":  # the name of earlier releases
+        name = "ActingState"
+    if name not in _HOME:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(_HOME[name]), name)
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

@@ -4,7 +4,7 @@ Lifelong Latent Actor-Critic (Xie, Harrison, Finn 2020, "Deep RL amidst Lifelong
 Non-Stationarity"), the LILI paper's closest baseline. Its latent dynamics z^{i+1} ~ f(. | z^i)
 are "only influenced by the environment and unaffected by the ego agent's behavior": LILAC can
 track a partner's strategy but has no model of how to influence it. Its parts, sharing the SAC
-core of :mod:`lili.agents.sac`:
+core of :mod:`lili.agents.core`:
 
 - Posterior q(z^i | tau^i) over the SAME interaction's transitions: a diagonal Gaussian from
   :class:`lili.nets.Encoder` (per-transition MLP, masked mean: permutation-invariant, any length).
@@ -54,7 +54,7 @@ Choices the papers leave open, and why (options live in ``AgentConfig.extra["lil
   encoder window); its window is this option, and ``warmup_interactions`` must exceed it.
 - Boundary: bootstrap across the interaction boundary (the stream goes on), from the first
   observation of k+1 with the latent LILAC will act with there: the prior's prediction from the
-  (target) posteriors of k-N+1..k. In :mod:`lili.agents.sac`'s terms that is the ``influence``
+  (target) posteriors of k-N+1..k. In :mod:`lili.agents.core`'s terms that is the ``influence``
   mode (the next interaction's latent), but for LILAC it is no influence path: the posterior
   explains tau^k's dynamics and rewards, which the partner's strategy, not the ego, determines,
   and the prior only sees posteriors. Latents inside the critic target come from the
@@ -73,8 +73,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from lili.agents.base import ActingState, AgentState, Normaliser, Params
-from lili.agents.lili import decoder_loss
-from lili.agents.sac import SAC, SACCore, register, register_options, sg
+from lili.agents.core import SACCore, sg
+from lili.agents.latent import decoder_loss
+from lili.agents.registry import register, register_options
+from lili.agents.sac import SAC
 from lili.buffer import Batch, InteractionBuffer, Window
 from lili.config import AgentConfig, extra_options
 from lili.dists import gaussian_kl, soft_clip_log_std

@@ -23,7 +23,7 @@ import jax
 import jax.numpy as jnp
 
 from lili.agents.base import AgentState
-from lili.agents.sac import SACCore
+from lili.agents.core import SACCore
 
 __all__ = ["stack", "unstack", "update_blocks"]
 

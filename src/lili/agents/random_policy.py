@@ -13,7 +13,9 @@ import jax
 import jax.numpy as jnp
 
 from lili.agents.base import ActingState, AgentState, Normaliser, Params
-from lili.agents.sac import SAC, SACCore, register
+from lili.agents.core import SACCore
+from lili.agents.registry import register
+from lili.agents.sac import SAC
 from lili.buffer import InteractionBuffer
 
 __all__ = ["RandomPolicy", "RandomCore"]

@@ -1,3 +1,4 @@
+# Over 400 lines: SLAC is one method (its latent model, sequence sampling and core), kept whole.
 """SLAC: Stochastic Latent Actor-Critic (Lee, Nagabandi, Abbeel, Levine; NeurIPS 2020).
 
 The LILI paper's POMDP baseline: a sequential latent variable model learns a belief over the
@@ -20,7 +21,7 @@ softplus + 1e-5, as in the official code):
   [-log p(x_t | z_t) - log p(r_t | ...) + KL(q(z1_t) || p(z1_t))] (analytic KL; t = 0 against
   N(0, I)), mean over the batch. Its own Adam optimiser; it is the ``rep_loss`` metric.
 
-Reinforcement learning, on the SAC core of :mod:`lili.agents.sac` (its actor, twin critic,
+Reinforcement learning, on the SAC core of :mod:`lili.agents.core` (its actor, twin critic,
 actor, temperature and critic-target formula), through the core's input hooks:
 
 - Critic Q(z_t, a_t) on a posterior sample, detached (the RL losses never train the model), from
@@ -80,7 +81,9 @@ import numpy as np
 import optax
 
 from lili.agents.base import ActingState, AgentState, Normaliser, Params
-from lili.agents.sac import SAC, SACCore, core_jit, register, register_options, sg
+from lili.agents.core import SACCore, core_jit, sg
+from lili.agents.registry import register, register_options
+from lili.agents.sac import SAC
 from lili.buffer import InteractionBuffer, sample
 from lili.config import AgentConfig, extra_options
 from lili.dists import gaussian_kl, gaussian_logp, tanh_gaussian

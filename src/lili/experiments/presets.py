@@ -14,9 +14,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from lili.agents.registry import CONTRIB_ALGOS, PAPER_ALGOS
+
 __all__ = ["Group", "Preset", "PRESETS", "get_preset", "ALL_ALGOS"]
 
-ALL_ALGOS = ("sac", "slac", "lilac", "lili-no-influence", "lili", "oracle")
+ALL_ALGOS = PAPER_ALGOS  # the paper's algos, in the registry's order
 PM = "lili/PointMass-v0"
 NOISE = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)
 HISTORY = (1, 3, 5, 7, 9, 11)
@@ -152,6 +154,17 @@ def _influence() -> Preset:
                                for env in INFLUENCE_ENVS))
 
 
+def _contrib() -> Preset:
+    """LILI beside its variants in :mod:`lili.contrib`, on Drift, where each was measured (not
+    part of ``paper``; ``lili reproduce contrib --algos lili-categorical`` runs one)."""
+    env = "lili/InfluenceDrift-v0"
+    return Preset(name="contrib", title="LILI's variants in lili.contrib, on Drift",
+                  where="not in the paper: variants that measured no gain (README.md, "
+                  "\"Contrib variants\")", interactions=2000,
+                  groups=(Group(folder="contrib", env=env, algos=("lili", *CONTRIB_ALGOS),
+                                env_kwargs=INFLUENCE_KWARGS[env]),))
+
+
 def _build() -> dict[str, Preset]:
     presets = [
         _env_preset("point-mass", PM, "Fig. 4 (Sec. 5.2; curves, heatmap of the target over "
@@ -175,6 +188,7 @@ def _build() -> dict[str, Preset]:
                     "at 1000 interactions); striker's modes over the last 200"),
         _history_text_rule(),
         _influence(),
+        _contrib(),
         _quickstart(),
     ]
     table = {p.name: p for p in presets}
@@ -189,7 +203,7 @@ def _build() -> dict[str, Preset]:
 
 PRESETS: dict[str, Preset] = _build()
 """Every preset by name; ``paper`` is all of the paper's items (not ``history-text-rule``,
-``influence`` or ``quickstart``)."""
+``influence``, ``contrib`` or ``quickstart``)."""
 
 
 def get_preset(name: str) -> Preset:

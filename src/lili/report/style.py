@@ -5,11 +5,12 @@ from __future__ import annotations
 import re
 import zlib
 
+from lili.agents.registry import ALGOS
+
 __all__ = ["ALGO_ORDER", "ALGO_LABELS", "ALGO_COLORS", "DPI", "algo_label", "algo_color",
            "algo_sort_key", "env_key", "env_title", "env_sort_key"]
 
-ALGO_ORDER = ("random", "sac", "slac", "lili-no-influence", "lili", "lilac", "oracle-last",
-              "oracle")
+ALGO_ORDER = ALGOS  # the registry's order (lili.agents.registry.TABLE)
 ALGO_LABELS = {
     "random": "Random",
     "sac": "SAC",
@@ -19,6 +20,11 @@ ALGO_LABELS = {
     "lilac": "LILAC",
     "oracle-last": "Oracle (last interaction)",
     "oracle": "Oracle",
+    "lili-categorical": "LILI (categorical)",
+    "lili-quantised": "LILI (quantised)",
+    "lili-bottleneck": "LILI (bottleneck)",
+    "lili-posterior": "LILI (posterior target)",
+    "lili-prediction-critic": "LILI (prediction critic)",
 }
 ALGO_COLORS = {
     "random": "#7f7f7f",

@@ -1,0 +1,45 @@
+"""Network pieces only :mod:`lili.contrib.latents` uses: the straight-through one-hot, the
+nearest code of a codebook, and an encoder that carries its codebook."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import flax.linen as nn
+import jax
+import jax.numpy as jnp
+
+from lili.nets import Encoder
+
+__all__ = ["straight_through_one_hot", "nearest_code", "QuantisedEncoder"]
+
+
+def straight_through_one_hot(logits: jax.Array) -> jax.Array:
+    """The one-hot of ``logits``' largest entry, with the softmax's gradient (Bengio et al.
+    2013's straight-through estimator): the forward value is exactly one-hot, so everything
+    downstream sees one of ``logits.shape[-1]`` names, while the encoder still learns."""
+    soft = jax.nn.softmax(logits, axis=-1)
+    hard = jax.nn.one_hot(jnp.argmax(logits, axis=-1), logits.shape[-1], dtype=soft.dtype)
+    return soft + jax.lax.stop_gradient(hard - soft)
+
+
+def nearest_code(e: jax.Array, codebook: jax.Array) -> jax.Array:
+    """The codebook row [K, L] nearest to each of ``e`` [..., L] (squared distance), without
+    gradient to ``e``: vector quantisation (van den Oord et al. 2017)."""
+    d = ((e[..., None, :] - codebook) ** 2).sum(-1)
+    return codebook[jnp.argmin(d, axis=-1)]
+
+
+class QuantisedEncoder(nn.Module):
+    """:class:`~lili.nets.Encoder` plus a codebook of ``codes`` vectors (the parameter
+    ``codebook`` [codes, latent_dim], read by the caller), so that a Polyak copy of the encoder
+    carries its codebook along. Returns the encoder's output before quantisation."""
+
+    hidden: Sequence[int]
+    latent_dim: int
+    codes: int
+
+    @nn.compact
+    def __call__(self, x: jax.Array, weight: jax.Array) -> jax.Array:
+        self.param("codebook", nn.initializers.normal(0.5), (self.codes, self.latent_dim))
+        return Encoder(self.hidden, self.latent_dim)(x, weight)
