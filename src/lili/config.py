@@ -10,6 +10,7 @@ entropy -|A|). The few additions, each documented below, address the failure mod
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import numbers
 import re
@@ -19,6 +20,9 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 import yaml
+
+from lili.errors import shown
+from lili.yaml_bounds import MAX_VALUE_CHARS, BoundedComposer, yaml_problem
 
 T = TypeVar("T")
 
@@ -218,13 +222,7 @@ class AgentConfig:
             if name in d:
                 _check_retired(name, d[name])
         d = {k: v for k, v in d.items() if k not in RETIRED_FIELDS}
-        names = {f.name for f in fields(cls)}
-        unknown = sorted(set(d) - names)
-        if unknown:
-            raise ValueError(
-                f"unknown config key(s) {', '.join(map(repr, unknown))}; allowed: "
-                f"{', '.join(sorted(names))}"
-            )
+        _check_keys(d)
         return cls(**d)
 
     def to_dict(self) -> dict[str, Any]:
@@ -234,6 +232,32 @@ class AgentConfig:
 
     def replace(self, **changes: Any) -> AgentConfig:
         return dataclasses.replace(self, **changes)
+
+
+class UnknownConfigKey(ValueError, TypeError):
+    """A config key that is no field of :class:`AgentConfig` (a TypeError too, as Python's own
+    for an unknown keyword)."""
+
+
+def _check_keys(keys: Any) -> None:
+    names = {f.name for f in fields(AgentConfig)}
+    unknown = sorted(set(keys) - names, key=str)
+    if unknown:
+        raise UnknownConfigKey(f"unknown config key(s) {', '.join(shown(k) for k in unknown)}; "
+                               f"allowed: {', '.join(sorted(names))}")
+
+
+_dataclass_init = AgentConfig.__init__
+
+
+@functools.wraps(_dataclass_init)
+def _init(self: AgentConfig, *args: Any, **kwargs: Any) -> None:
+    # ``AgentConfig(foo=1)`` names the fields instead of the dataclass's bare TypeError.
+    _check_keys(kwargs)
+    _dataclass_init(self, *args, **kwargs)
+
+
+AgentConfig.__init__ = _init  # type: ignore[method-assign]
 
 
 def _check_retired(name: str, value: Any) -> None:
@@ -360,7 +384,7 @@ def extra_options(config: AgentConfig, key: str, defaults: dict[str, Any],
     return {**defaults, **raw}
 
 
-class _Loader(yaml.SafeLoader):
+class _Loader(BoundedComposer, yaml.SafeLoader):
     """PyYAML's safe loader, with two changes a user writing a config expects.
 
     ``1e-3`` is a number (YAML 1.2; PyYAML follows YAML 1.1, where a float needs a dot, so
@@ -388,22 +412,17 @@ _Loader.add_implicit_resolver(
                                           r"[eE][-+]?[0-9]+$"), list("-+0123456789."))
 
 
+class _ValueLoader(_Loader):
+    max_chars = MAX_VALUE_CHARS
+
+
 def yaml_value(text: str) -> Any:
     """Parse one YAML value (``--env-kwarg KEY=VALUE``) with the rules of :func:`read_yaml`."""
     try:
-        return yaml.load(text, Loader=_Loader)  # noqa: S506 - _Loader is a SafeLoader
+        return yaml.load(text, Loader=_ValueLoader)  # noqa: S506 - _Loader is a SafeLoader
     except yaml.YAMLError as e:
-        raise ValueError(f"{text!r} is not a valid YAML value ({_yaml_problem(e)})") from None
-
-
-def _yaml_problem(e: yaml.YAMLError) -> str:
-    """One line: where and what (PyYAML's own message spans several lines with a snippet)."""
-    if isinstance(e, yaml.MarkedYAMLError):
-        mark = e.problem_mark or e.context_mark
-        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
-        context = f" ({e.context})" if e.context else ""
-        return f"{where}{e.problem or 'malformed'}{context}"
-    return str(e).splitlines()[0] if str(e) else type(e).__name__
+        raise ValueError(f"{shown(text)} is not a valid YAML value ({yaml_problem(e)})") \
+            from None
 
 
 def read_yaml(path: str | Path, what: str = "config file") -> Any:
@@ -423,7 +442,7 @@ def read_yaml(path: str | Path, what: str = "config file") -> Any:
     try:
         return yaml.load(text, Loader=_Loader)  # noqa: S506 - _Loader is a SafeLoader
     except yaml.YAMLError as e:
-        raise ValueError(f"{what} {str(p)!r} is not valid YAML: {_yaml_problem(e)}") from None
+        raise ValueError(f"{what} {str(p)!r} is not valid YAML: {yaml_problem(e)}") from None
 
 
 def load_config(path: str | Path) -> AgentConfig:

@@ -10,6 +10,7 @@ format tag and the reader are :mod:`lili.agents.registry`'s, beside ``load_agent
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -107,10 +108,6 @@ class AgentFacade:
         loop that plays a user's env with this agent wraps it with this first."""
         return env
 
-    def _wrap(self, env: gym.Env) -> gym.Env:
-        # The name of earlier releases (lili.play.policy still calls it).
-        return self.wrap_env(env)
-
     # -- what the loops read ---------------------------------------------------------------------
     @property
     def boundary(self) -> str:
@@ -204,13 +201,17 @@ class AgentFacade:
         self.state, metrics = self.core.learn_block(self.state, buffer, key)
         return metrics
 
-    def learn(self, n_interactions: int, progress: bool = False, callback=None) -> AgentFacade:
-        """Train for ``n_interactions`` more interactions on ``self.env`` (see ``lili.train``)."""
+    def learn(self, n_interactions: int, progress: bool = False,
+              callback: Callable[[dict[str, Any]], bool | None] | None = None) -> AgentFacade:
+        """Train for ``n_interactions`` more interactions on ``self.env`` (see ``lili.train``).
+
+        ``callback(row)`` gets each interaction's metrics row; returning ``False`` stops
+        training after that interaction, as in Stable-Baselines3."""
         from lili.train import Stream, train
 
-        if self.stream is None:
-            self.stream = Stream.for_agent(self, self.env)
-        train(self, self.stream, n_interactions, progress=progress, callback=callback)
+        # train() attaches the stream to the agent (one place does).
+        stream = self.stream if self.stream is not None else Stream.for_agent(self, self.env)
+        train(self, stream, n_interactions, progress=progress, callback=callback)
         return self
 
     # -- persistence -------------------------------------------------------------------------
@@ -272,7 +273,9 @@ class AgentFacade:
     def load(cls, path: str | Path, env: gym.Env | str) -> AgentFacade:
         """Load an agent saved by :meth:`save` for ``env``; CheckpointError if it does not fit."""
         agent = load_agent(path, env)
-        if not isinstance(agent, cls):
+        # Exactly this class: LILI subclasses SAC, so SAC.load of a LILI file would otherwise
+        # return a LILI without a word (AgentFacade.load takes any agent, as load_agent does).
+        if not isinstance(agent, cls) or (cls is not AgentFacade and type(agent) is not cls):
             raise CheckpointError(
                 f"{path} holds a {agent.algo!r} agent, not a {cls.__name__} "
                 "(lili.agents.load_agent picks the class from the file)"

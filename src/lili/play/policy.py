@@ -63,7 +63,7 @@ class Blocker:
     def wrap(self, env: gym.Env) -> gym.Env:
         """The env the agent acts on, built around the play env (the last-interaction Oracle
         appends the last shot; the others act on the env itself)."""
-        return self.agent._wrap(env)
+        return self.agent.wrap_env(env)
 
     def new_game(self) -> BlockerGame:
         """Acting state for a fresh sequence of interactions (z^1 = 0)."""
