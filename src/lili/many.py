@@ -38,9 +38,9 @@ from lili.buffer import (
     InteractionBuffer,
     Window,
     _available_memory,
-    _gather_window,
+    _window,
+    _write,
     buffer_nbytes,
-    pooling_weights,
 )
 from lili.env_calls import env_reset, env_step, where
 from lili.train import (
@@ -117,21 +117,10 @@ def _write_all(arrays: dict[str, jax.Array], slots: jax.Array, rows: dict[str, j
     return {name: put(v, rows[name]) for name, v in arrays.items()}
 
 
-@partial(jax.jit, donate_argnums=0)
-def _set_run(arrays: dict[str, jax.Array], j: jax.Array,
-             run: dict[str, jax.Array]) -> dict[str, jax.Array]:
-    return {name: v.at[j].set(run[name]) for name, v in arrays.items()}
-
-
 @partial(jax.jit, static_argnames=("steps",))
 def _windows(arrays: dict[str, jax.Array], counts: jax.Array, idx: jax.Array,
              steps: int | None) -> Window:
-    def one(a, c, i):
-        out = _gather_window(a, c, i, None, None)
-        out["weight"] = pooling_weights(out["valid"], out["last"], steps)
-        return out
-
-    return jax.vmap(one)(arrays, counts, idx)
+    return jax.vmap(partial(_window, steps=steps))(arrays, counts, idx)
 
 
 class StackedBuffers:
@@ -250,7 +239,8 @@ class BufferView:
         own = InteractionBuffer(self.capacity, self.horizon, self.obs_dim, self.act_dim)
         own.load_state_dict(d)
         st = self._stacked
-        st.arrays = _set_run(st.arrays, np.int32(self._j), own.arrays)
+        # One run's slot of the stack, written in place as InteractionBuffer.add writes a slot.
+        st.arrays = _write(st.arrays, np.int32(self._j), own.arrays)
         st.counts[self._j] = own.count
 
     def add(self, traj: dict[str, np.ndarray], next_first_obs: np.ndarray) -> int:
