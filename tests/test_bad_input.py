@@ -201,7 +201,8 @@ CASES = [
      ["buffer_capacity=30", "an integer >= 50"]),
     ("extra: {slac: 5}", _config("extra: {slac: 5}\n", "lili"), ["extra.slac=5", "a mapping"]),
     ("extra: {sac: {x: 1}}", _config("extra: {sac: {x: 1}}\n", "lili"),
-     ["extra.sac", "allowed: lilac, oracle-last, slac"]),
+     ["extra.sac", "allowed: lilac, lili-bottleneck, lili-categorical, lili-posterior, "
+      "lili-prediction-critic, lili-quantised, oracle-last, slac"]),
     ("extra: {oracle-last: {outcome: 1}}", _config("extra: {oracle-last: {outcome: 1}}\n",
                                                    "oracle-last"),
      ["extra.oracle-last.outcome=1", "allowed: true or false"]),
