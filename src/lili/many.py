@@ -33,6 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from lili.agents.base import AgentState
+from lili.agents.core import SACCore
 from lili.agents.multiseed import stack, unstack, update_blocks
 from lili.buffer import (
     InteractionBuffer,
@@ -71,10 +72,10 @@ def check_group(agents: Sequence[Any], fraction: float = 0.5) -> None:
     first = agents[0]
     for a in agents:
         core = getattr(a, "core", None)
-        if core is None or not hasattr(core, "block"):
+        if not isinstance(core, SACCore):
             raise ValueError(f"algo {a.algo!r} cannot train in a group (it has no update "
                              "block); allowed: agents built on SACCore")
-        if type(core).learn_block is not _base_learn_block(core):
+        if type(core).learn_block is not SACCore.learn_block:
             raise ValueError(f"algo {a.algo!r} cannot train in a group (its update is not the "
                              "shared block: it pretrains a model first); train it alone")
         if a.algo != first.algo:
@@ -94,14 +95,6 @@ def check_group(agents: Sequence[Any], fraction: float = 0.5) -> None:
                          f"buffers ({each / 2**20:.1f} MiB each), more than {fraction:.0%} of the "
                          f"{free / 2**30:.1f} GiB available; allowed: at most "
                          f"{max(1, int(fraction * free // each))} runs of this size per group")
-
-
-def _base_learn_block(core: Any) -> Any:
-    # The SACCore implementation of learn_block, wherever the class hierarchy defines it.
-    for cls in type(core).__mro__:
-        if cls.__name__ == "SACCore":
-            return cls.learn_block
-    return None
 
 
 @partial(jax.jit, donate_argnums=0)
