@@ -156,7 +156,11 @@ CASES = [
     ("target_entropy: nan", _config("target_entropy: nan\n"),
      ["target_entropy='nan'", "a finite number or null"]),
     ("extra: {slac: {bogus: 1}} --algo lili", _config("extra: {slac: {bogus: 1}}\n", "lili"),
+     ["extra.slac", "not read by lili", "allowed: lili reads"]),
+    ("extra: {slac: {bogus: 1}} --algo slac", _config("extra: {slac: {bogus: 1}}\n", "slac"),
      ["'bogus'", "extra.slac", "allowed: z1_dim"]),
+    ("latent_dim: 3 --algo sac", _config("latent_dim: 3\n", "sac"),
+     ["latent_dim=3", "not read by sac", "allowed: sac reads batch_interactions"]),
     ("extra: 5", _config("extra: 5\n", "lili"), ["extra=5", "allowed: a mapping"]),
     ("buffer_capacity: 2", _config("buffer_capacity: 2\n"),
      ["buffer_capacity=2", "an integer >= 20", "warmup_interactions=20"]),
@@ -200,13 +204,13 @@ CASES = [
      _config("warmup_interactions: 50\nbuffer_capacity: 30\n"),
      ["buffer_capacity=30", "an integer >= 50"]),
     ("extra: {slac: 5}", _config("extra: {slac: 5}\n", "lili"), ["extra.slac=5", "a mapping"]),
-    ("extra: {sac: {x: 1}}", _config("extra: {sac: {x: 1}}\n", "lili"),
-     ["extra.sac", "allowed: lilac, lili-bottleneck, lili-categorical, lili-posterior, "
-      "lili-prediction-critic, lili-quantised, oracle-last, slac"]),
+    ("extra: {sac: {x: 1}}", _config("extra: {sac: {x: 1}}\n", "sac"),
+     ["extra.sac", "sac has no options", "allowed: sac reads"]),
     ("extra: {oracle-last: {outcome: 1}}", _config("extra: {oracle-last: {outcome: 1}}\n",
                                                    "oracle-last"),
      ["extra.oracle-last.outcome=1", "allowed: true or false"]),
-    ("extra: {lilac: {kl_weight: .inf}}", _config("extra: {lilac: {kl_weight: .inf}}\n", "lili"),
+    ("extra: {lilac: {kl_weight: .inf}}", _config("extra: {lilac: {kl_weight: .inf}}\n",
+                                                  "lilac"),
      ["extra.lilac.kl_weight=inf", "finite"]),
     ("--env-kwarg history twice", _train("--env-kwarg", "history=2", "--env-kwarg", "history=3"),
      ["history is given twice", "each KEY once"]),
@@ -299,6 +303,9 @@ def test_check_extra_checks_every_entry_whatever_the_algo() -> None:
     check_extra(AgentConfig(extra={"slac": {"model_every": 2}, "lilac": {"kl_weight": 0.5}}))
     with pytest.raises(ValueError, match="'bogus'"):
         check_extra(AgentConfig(extra={"slac": {"bogus": 1}}))
+    with pytest.raises(ValueError, match="'sac' is not an algo with options; allowed: slac, "
+                                         "lilac, oracle-last, lili-categorical"):
+        check_extra(AgentConfig(extra={"sac": {}}))
     with pytest.raises(ValueError, match="prior_window=0"):
         check_extra(AgentConfig(extra={"lilac": {"prior_window": 0}}))
 

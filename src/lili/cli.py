@@ -185,7 +185,7 @@ def _check_run_folder(args: argparse.Namespace, env_id: str, env_kwargs: dict[st
 
 
 def cmd_train(args: argparse.Namespace) -> int:
-    from lili.agents import ALGOS, check_extra, make_agent
+    from lili.agents import ALGOS, check_config, make_agent
     from lili.config import AgentConfig, load_config
     from lili.runs import RunLogger, check_out_dir, resume_run
     from lili.train import Stream, train
@@ -199,7 +199,11 @@ def cmd_train(args: argparse.Namespace) -> int:
     if args.config:
         _check_config_size(args.config)
     config = load_config(args.config) if args.config else AgentConfig()
-    check_extra(config)
+    try:
+        check_config(args.algo, config)
+    except ValueError as e:
+        raise UsageError(f"config file {str(args.config)!r}: {e}" if args.config
+                         else str(e)) from None
     env_kwargs = _parse_kwargs(args.env_kwarg)
     folders = [_check_run_folder(args, env_id, env_kwargs, config, seed) for seed in seeds]
     envs = [_make_env(env_id, env_kwargs) for _ in seeds]

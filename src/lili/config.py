@@ -27,8 +27,8 @@ from lili.yaml_bounds import MAX_VALUE_CHARS, BoundedComposer, yaml_problem
 T = TypeVar("T")
 
 __all__ = ["check_seed", "MAX_SEED", "AgentConfig", "load_config", "read_yaml", "yaml_value",
-           "BOUNDARY_DISCOUNTS", "BOUNDARY_MODES", "RETIRED_FIELDS", "extra_options",
-           "dataclass_options", "stored_agent_config"]
+           "BOUNDARY_DISCOUNTS", "BOUNDARY_MODES", "RETIRED_FIELDS", "LOOP_FIELDS", "SAC_FIELDS",
+           "LATENT_FIELDS", "dataclass_options", "stored_agent_config"]
 
 MAX_SEED = 2**32 - 1
 """Largest seed: NumPy's and JAX's generators take 32-bit seeds without folding them."""
@@ -62,13 +62,34 @@ they ran with by default, where the other values went: a value -> contrib algo m
 contrib algo and option that took the field, or a note). :meth:`AgentConfig.from_dict` drops
 them at their default and refuses any other value with one message naming what to use."""
 
+LOOP_FIELDS: frozenset[str] = frozenset({
+    "warmup_interactions", "random_interactions", "buffer_capacity", "checkpoint_every"})
+"""The fields every agent reads: the training loop's (the random policy reads only these)."""
+SAC_FIELDS: frozenset[str] = LOOP_FIELDS | {
+    "gamma", "boundary_discount", "tau", "lr_actor", "lr_critic", "lr_alpha", "hidden",
+    "batch_interactions", "per_interaction", "updates_per_step", "target_entropy", "init_alpha",
+    "phase_feature", "normalize", "boundary"}
+"""The fields every learning agent reads: the SAC core's (SAC, SLAC, the Oracles)."""
+LATENT_FIELDS: frozenset[str] = SAC_FIELDS | {
+    "lr_encoder", "lr_decoder", "enc_hidden", "latent_dim", "history", "encoder_transitions",
+    "target_encoder", "critic_to_encoder", "rep_weight"}
+"""The fields the agents with a latent read (LILI's encoder and decoder; LILAC and two contrib
+variants read all but one, see their ``reads`` in ``lili.agents.registry.TABLE``)."""
+
 
 @dataclass(frozen=True)
 class AgentConfig:
-    """Hyperparameters of every agent (fields irrelevant to an agent are ignored by it).
+    """Hyperparameters of the agents: the fields they share, and ``extra`` for each agent's own.
 
-    The variants of LILI that measured no gain take their options from ``extra`` under their
-    algo name (:mod:`lili.contrib`); the fields they once had here are :data:`RETIRED_FIELDS`.
+    Each algo reads only some of the fields: :data:`LOOP_FIELDS` (every agent: the training
+    loop reads them), :data:`SAC_FIELDS` (every learning agent) and :data:`LATENT_FIELDS` (the
+    agents with a latent: LILI, LILI (no influence), LILAC, the contrib variants); the exact set
+    of each algo is ``reads`` of its entry in :data:`lili.agents.registry.TABLE`. A field that
+    an algo does not read, set to anything but its default, is an error when an agent is made
+    (``lili.agents.check_config``), not silently ignored. An algo's own options live in
+    ``extra[<algo>]``, as the frozen dataclass the algo registers (SLAC, LILAC, the
+    last-interaction Oracle and the variants of :mod:`lili.contrib`, which took the fields of
+    :data:`RETIRED_FIELDS`).
 
     Attributes:
         gamma: per-step discount, applied across interaction boundaries too (the stream of
@@ -90,7 +111,8 @@ class AgentConfig:
         hidden: actor and critic hidden widths (paper: 2x256).
         enc_hidden: encoder and decoder hidden widths (paper: 2x128).
         latent_dim: size of z (paper: 8).
-        history: number of past interactions the encoder reads (1 = the paper's LILI).
+        history: number of past interactions the encoder reads (1 = the paper's LILI; LILAC's
+            window is its own option ``prior_window``).
         batch_interactions, per_interaction: a batch is ``batch_interactions`` interactions
             with ``per_interaction`` transitions each (32 x 8 = 256, as in LILI's code), drawn
             uniformly over time steps (the boundary is not oversampled).
@@ -128,16 +150,17 @@ class AgentConfig:
             ``bootstrap`` (SAC, Oracle: y = r + gamma V(s^{i+1}_1)), ``influence`` (LILI:
             y = r + gamma V(s^{i+1}_1, E(tau^i))), ``cut`` (LILI no influence: y = r) or
             ``same_z`` (a public re-implementation's reading of no influence: bootstrap with
-            the unchanged z^i). Set by the agent; override only to compare readings.
+            the unchanged z^i). Set by the agent; override only to compare readings. (Every
+            learning agent but SLAC takes every mode; SLAC takes bootstrap and cut.)
         buffer_capacity: interactions kept (ring buffer); at least ``warmup_interactions``
             (the normalisation statistics are fitted on every warm-up interaction, so a
             smaller ring would forget some before they are used) and ``history + 1`` (the
             encoder's window plus the interaction it is applied to).
         checkpoint_every: interactions between checkpoints in a run folder.
-        extra: options of one agent, keyed by its name, e.g. ``{"slac": {"model_every": 2}}``
-            (see ``lili.agents.slac.SLAC_OPTIONS``). This class checks the shape (agent
-            name -> mapping of options); ``lili.agents.check_extra`` checks every entry's
-            names and values, whichever agent the config is for.
+        extra: the options of the agent the config is for, under its algo name, e.g.
+            ``{"slac": {"model_every": 2}}`` (see ``lili.agents.slac.SLACOptions``). This class
+            checks the shape (algo name -> mapping of options); ``lili.agents.check_config``
+            checks that the only entry is the algo's own and its names and values.
 
     Every field is checked on construction: a value of the wrong type (``gamma=False``,
     ``hidden=[256.5]``), out of range, NaN or infinite raises ValueError naming the field,
@@ -362,26 +385,16 @@ def dataclass_options(config: AgentConfig, key: str, cls: type[T]) -> T:
     """An agent's own options as the frozen dataclass ``cls``, from ``config.extra[key]``
     (the fields not given keep their defaults); ValueError naming ``extra.<key>`` and the
     allowed names or the bad value (``cls.__post_init__`` checks the values)."""
-    defaults = {f.name: f.default for f in fields(cls)}
-    return cls(**extra_options(config, key, defaults, key))
-
-
-def extra_options(config: AgentConfig, key: str, defaults: dict[str, Any],
-                  label: str) -> dict[str, Any]:
-    """An agent's own options: ``config.extra[key]`` over ``defaults``, keys checked.
-
-    Raises ValueError naming the bad value when ``extra[key]`` is not a mapping or has keys that
-    ``defaults`` lacks; checking each value is the agent's job.
-    """
+    names = [f.name for f in fields(cls)]  # type: ignore[arg-type]
     raw = config.extra.get(key, {})
     if not isinstance(raw, dict):
         raise ValueError(f"config extra.{key}={raw!r} is invalid; allowed: a mapping of "
-                         f"{', '.join(defaults)}")
-    unknown = sorted(set(raw) - set(defaults))
+                         f"{', '.join(names) or 'nothing'}")
+    unknown = sorted(set(raw) - set(names))
     if unknown:
-        raise ValueError(f"unknown {label} option(s) {', '.join(map(repr, unknown))} in config "
-                         f"extra.{key}; allowed: {', '.join(defaults) or 'none'}")
-    return {**defaults, **raw}
+        raise ValueError(f"unknown {key} option(s) {', '.join(map(repr, unknown))} in config "
+                         f"extra.{key}; allowed: {', '.join(names) or 'none'}")
+    return cls(**raw)
 
 
 class _Loader(BoundedComposer, yaml.SafeLoader):

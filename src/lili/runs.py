@@ -37,7 +37,8 @@ import yaml
 import lili
 from lili.agents import CheckpointError, load_agent
 from lili.agents.sac import SAC
-from lili.config import AgentConfig, stored_agent_config
+from lili.agents.registry import stored_config
+from lili.config import AgentConfig
 from lili.errors import shown
 from lili.metrics_file import (
     METRIC_COLUMNS,
@@ -155,7 +156,8 @@ def read_run_config(run_dir: str | Path) -> dict[str, Any]:
     keys = ("env", "env_kwargs", "algo", "seed", "interactions", "agent")
     if not isinstance(cfg, dict) or any(k not in cfg for k in keys):
         raise ValueError(f"{path} is not a lili run config (it must map {', '.join(keys)})")
-    return {**cfg, "agent": stored_agent_config(cfg["agent"])}
+    # The fields its algo does not read at their defaults: runs of earlier releases took any.
+    return {**cfg, "agent": stored_config(cfg["algo"], cfg["agent"])}
 
 
 def latest_checkpoint(run_dir: str | Path) -> tuple[Path, int]:

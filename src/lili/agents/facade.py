@@ -30,7 +30,7 @@ from lili.agents.base import (
     env_horizon,
 )
 from lili.agents.core import SACCore
-from lili.agents.registry import AGENT_FORMAT, check_extra, load_agent
+from lili.agents.registry import AGENT_FORMAT, agent_options, check_config, load_agent
 from lili.buffer import InteractionBuffer
 from lili.config import AgentConfig
 
@@ -79,7 +79,7 @@ class AgentFacade:
     def __init__(self, env: gym.Env | str, config: AgentConfig | dict | None = None,
                  seed: int = 0) -> None:
         self.config = _as_config(config)
-        check_extra(self.config)
+        check_config(self.algo, self.config)
         self.seed = check_seed(seed)
         self.env = self.wrap_env(_as_env(env))
         obs_space, act_space = self.env.observation_space, self.env.action_space
@@ -122,9 +122,10 @@ class AgentFacade:
         return self.core.latent_dim
 
     @property
-    def options(self) -> dict[str, Any]:
-        """The agent's own options (``AgentConfig.extra[name]`` resolved; SLAC, LILAC)."""
-        return getattr(self.core, "options", {})
+    def options(self) -> Any:
+        """The agent's own options (``AgentConfig.extra[algo]`` as the algo's options dataclass,
+        e.g. :class:`lili.agents.slac.SLACOptions`), or None for an algo without options."""
+        return agent_options(self.algo, self.config)
 
     @property
     def num_interactions(self) -> int:

@@ -24,7 +24,7 @@ core of :mod:`lili.agents.core`:
   not exist yet. The first interaction uses the unconditional prior's mean.
 
 Choices the papers leave open, and why (options live in ``AgentConfig.extra["lilac"]``, see
-:data:`LILAC_OPTIONS`):
+:class:`LILACOptions`):
 
 - ``critic_latent="prior"`` (default): actor and critic see the latent the agent acts with, the
   prior's prediction for interaction k, detached. This is the RL term of LILAC's bound (z^i from
@@ -50,8 +50,9 @@ Choices the papers leave open, and why (options live in ``AgentConfig.extra["lil
   (Point Mass, default sizes: 17 ms per update at N = 2, 24 ms at N = 4, LILI 11 ms). The
   sampler's window is k-N..k, so the prior for k reads k-N..k-1, and each earlier position j
   gives the prior a KL with the context it has (0..N-1 previous interactions): what acting in
-  the first N interactions of a sequence needs. LILAC ignores ``AgentConfig.history`` (LILI's
-  encoder window); its window is this option, and ``warmup_interactions`` must exceed it.
+  the first N interactions of a sequence needs. LILAC does not read ``AgentConfig.history``
+  (LILI's encoder window; setting it is an error); its window is this option, and
+  ``warmup_interactions`` must exceed it.
 - Boundary: bootstrap across the interaction boundary (the stream goes on), from the first
   observation of k+1 with the latent LILAC will act with there: the prior's prediction from the
   (target) posteriors of k-N+1..k. In :mod:`lili.agents.core`'s terms that is the ``influence``
@@ -65,6 +66,7 @@ Choices the papers leave open, and why (options live in ``AgentConfig.extra["lil
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import flax.linen as nn
@@ -75,19 +77,55 @@ import numpy as np
 from lili.agents.base import ActingState, AgentState, Normaliser, Params
 from lili.agents.core import SACCore, sg
 from lili.agents.latent import decoder_loss
-from lili.agents.registry import register, register_options
+from lili.agents.registry import register
 from lili.agents.sac import SAC
 from lili.buffer import Batch, InteractionBuffer, Window
-from lili.config import AgentConfig, extra_options
+from lili.config import AgentConfig, dataclass_options
 from lili.dists import gaussian_kl, soft_clip_log_std
 from lili.nets import Decoder, Encoder
 
-__all__ = ["LILAC", "LILACCore", "LatentPrior", "LILAC_OPTIONS"]
-
-LILAC_OPTIONS: dict[str, Any] = {"prior_window": 2, "kl_weight": 1.0, "critic_latent": "prior"}
-"""Defaults of LILAC's options, set as ``AgentConfig(extra={"lilac": {...}})``."""
+__all__ = ["LILAC", "LILACCore", "LatentPrior", "LILACOptions"]
 
 CRITIC_LATENTS = ("prior", "posterior")
+
+
+@dataclass(frozen=True)
+class LILACOptions:
+    """LILAC's options, set as ``AgentConfig(extra={"lilac": {...}})`` (the module docstring
+    says why each default): ``prior_window`` (N = 2 previous interactions), ``kl_weight``
+    (beta = 1) and ``critic_latent`` (``prior`` or ``posterior``)."""
+
+    prior_window: int = 2
+    kl_weight: float = 1.0
+    critic_latent: str = "prior"
+
+    def __post_init__(self) -> None:
+        n = self.prior_window
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"config extra.lilac.prior_window={n!r} is invalid; allowed: an "
+                             "integer >= 1")
+        beta = self.kl_weight
+        if isinstance(beta, bool) or not isinstance(beta, (int, float)) or beta < 0:
+            raise ValueError(f"config extra.lilac.kl_weight={beta!r} is invalid; allowed: a "
+                             "number >= 0")
+        if self.critic_latent not in CRITIC_LATENTS:
+            raise ValueError(f"config extra.lilac.critic_latent={self.critic_latent!r} is "
+                             f"invalid; allowed: {', '.join(CRITIC_LATENTS)}")
+        object.__setattr__(self, "prior_window", int(n))
+        object.__setattr__(self, "kl_weight", float(beta))
+
+    def check(self, config: AgentConfig) -> None:
+        """ValueError unless ``config``'s warm-up and buffer hold the prior's window."""
+        n = self.prior_window
+        if config.warmup_interactions <= n:
+            raise ValueError(
+                f"config warmup_interactions={config.warmup_interactions} is invalid for LILAC "
+                f"with prior_window={n}; allowed: an integer >= {n + 1} (the first update needs "
+                "prior_window earlier interactions)")
+        if config.buffer_capacity <= n:
+            raise ValueError(
+                f"config buffer_capacity={config.buffer_capacity} is invalid for LILAC with "
+                f"prior_window={n}; allowed: an integer >= {n + 1}")
 
 
 class LatentPrior(nn.Module):
@@ -117,32 +155,6 @@ class LatentPrior(nn.Module):
         return mean, soft_clip_log_std(log_std)
 
 
-def _options(config: AgentConfig) -> dict[str, Any]:
-    opts = extra_options(config, "lilac", LILAC_OPTIONS, "LILAC")
-    n = opts["prior_window"]
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ValueError(f"config extra.lilac.prior_window={n!r} is invalid; allowed: an "
-                         "integer >= 1")
-    beta = opts["kl_weight"]
-    if isinstance(beta, bool) or not isinstance(beta, (int, float)) or beta < 0:
-        raise ValueError(f"config extra.lilac.kl_weight={beta!r} is invalid; allowed: a "
-                         "number >= 0")
-    if opts["critic_latent"] not in CRITIC_LATENTS:
-        raise ValueError(f"config extra.lilac.critic_latent={opts['critic_latent']!r} is "
-                         f"invalid; allowed: {', '.join(CRITIC_LATENTS)}")
-    if config.warmup_interactions <= n:
-        raise ValueError(
-            f"config warmup_interactions={config.warmup_interactions} is invalid for LILAC with "
-            f"prior_window={n}; allowed: an integer >= {n + 1} (the first update needs "
-            "prior_window earlier interactions)")
-    if config.buffer_capacity <= n:
-        raise ValueError(
-            f"config buffer_capacity={config.buffer_capacity} is invalid for LILAC with "
-            f"prior_window={n}; allowed: an integer >= {n + 1}")
-    return {"prior_window": int(n), "kl_weight": float(beta),
-            "critic_latent": opts["critic_latent"]}
-
-
 class LILACCore(SACCore):
     """LILAC's maths (see the module docstring)."""
 
@@ -151,7 +163,8 @@ class LILACCore(SACCore):
 
     def __init__(self, obs_dim: int, act_dim: int, horizon: int, config: AgentConfig,
                  boundary: str | None = None) -> None:
-        self.options = _options(config)
+        self.options: LILACOptions = dataclass_options(config, "lilac", LILACOptions)
+        self.options.check(config)
         super().__init__(obs_dim, act_dim, horizon, config, boundary)
 
     # -- construction --------------------------------------------------------------------------
@@ -163,7 +176,7 @@ class LILACCore(SACCore):
     def _build(self) -> None:
         # SAC sets history from config.history (LILI's encoder window); LILAC's window is the
         # prior's, and everything downstream (sampler, acting, evaluate) reads self.history.
-        self.history = self.options["prior_window"]
+        self.history = self.options.prior_window
         super()._build()
         cfg = self.config
         self.posterior = Encoder(cfg.enc_hidden, 2 * cfg.latent_dim)
@@ -247,7 +260,7 @@ class LILACCore(SACCore):
         # The last sampled step is the interaction's last, so max t + 1 is its length.
         per_step = kl / ((win["t"] * win["valid"]).max(-1) + 1.0)
         context = per_step[:, :n].sum(-1)
-        beta = self.options["kl_weight"]
+        beta = self.options.kl_weight
         loss = recon + beta * (per_step[:, n] + context - sg(context)).mean()
         return {"loss": loss, "recon": recon, "kl": kl[:, n].mean(),
                 "kl_context": kl[:, :n].mean()}
@@ -263,7 +276,7 @@ class LILACCore(SACCore):
         tq_mean, _, tp_mean, _, _ = self._model(enc_t, norm, batch["window"])
         # The acting latent of k+1 reads k-N+1..k: drop the window's oldest interaction.
         tp_next, _ = self.prior_params(enc_t, tq_mean, present.at[..., 0].set(False))
-        if self.options["critic_latent"] == "posterior":
+        if self.options.critic_latent == "posterior":
             return q_mean[:, n], tq_mean[:, n], tp_next[:, n + 1]
         return sg(p_mean[:, n]), tp_mean[:, n], tp_next[:, n + 1]
 
@@ -297,5 +310,4 @@ class LILAC(SAC):
     core_cls = LILACCore
 
 
-register("lilac", LILAC)
-register_options("lilac", _options)
+register("lilac", LILAC, options=LILACOptions)

@@ -2,15 +2,28 @@
 
 from __future__ import annotations
 
-from typing import Any
+from dataclasses import dataclass
 
 import gymnasium as gym
 
-from lili.agents.registry import register, register_options
+from lili.agents.registry import register
 from lili.agents.sac import SAC
-from lili.config import AgentConfig, extra_options
+from lili.config import dataclass_options
 
-__all__ = ["Oracle", "LastInteractionOracle", "ORACLE_LAST_OPTIONS"]
+__all__ = ["Oracle", "LastInteractionOracle", "OracleLastOptions"]
+
+
+@dataclass(frozen=True)
+class OracleLastOptions:
+    """The last-interaction Oracle's options, ``AgentConfig.extra["oracle-last"]``: ``outcome``
+    (see :class:`LastInteractionOracle`)."""
+
+    outcome: bool = False
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.outcome, bool):
+            raise ValueError(f"config extra.oracle-last.outcome={self.outcome!r} is invalid; "
+                             "allowed: true or false")
 
 
 class Oracle(SAC):
@@ -49,19 +62,9 @@ class LastInteractionOracle(Oracle):
 
         if isinstance(env, LastInteractionObservation):
             return env
-        return LastInteractionObservation(env, outcome=_oracle_last_options(self.config)["outcome"])
+        options = dataclass_options(self.config, "oracle-last", OracleLastOptions)
+        return LastInteractionObservation(env, outcome=options.outcome)
 
 
-ORACLE_LAST_OPTIONS: dict[str, Any] = {"outcome": False}
-"""Options of the last-interaction Oracle in ``AgentConfig.extra["oracle-last"]``."""
-
-
-def _oracle_last_options(config: AgentConfig) -> dict[str, Any]:
-    opts = extra_options(config, "oracle-last", ORACLE_LAST_OPTIONS, "Oracle (last interaction)")
-    if not isinstance(opts["outcome"], bool):
-        raise ValueError(f"config extra.oracle-last.outcome={opts['outcome']!r} is invalid; "
-                         "allowed: true or false")
-    return opts
 register("oracle", Oracle)
-register("oracle-last", LastInteractionOracle)
-register_options("oracle-last", _oracle_last_options)
+register("oracle-last", LastInteractionOracle, options=OracleLastOptions)

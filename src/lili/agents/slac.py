@@ -39,7 +39,7 @@ actor, temperature and critic-target formula), through the core's input hooks:
 Sampling (:func:`sample_sequences`) is pure JAX and runs inside the fused ``lax.scan`` block,
 like :func:`lili.buffer.sample`; the critic's latent samples are computed once per update there.
 
-Defaults (options in ``AgentConfig.extra["slac"]``, see :data:`SLAC_OPTIONS`) are the official
+Defaults (options in ``AgentConfig.extra["slac"]``, see :class:`SLACOptions`) are the official
 ones where this setting affords them: z1 32, K = 8, model Adam 1e-4, model batch 32 sequences,
 decoder std sqrt(0.1), one model step per update. Shared with every agent of the library
 (``AgentConfig``): actor / critic / temperature Adam 3e-4, RL batch 32 interactions x 8 steps =
@@ -70,6 +70,7 @@ what makes a fixed decoder std meaningful for state vectors. Changes of scale, w
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from collections.abc import Sequence
 from functools import partial
 from typing import Any
@@ -82,76 +83,73 @@ import optax
 
 from lili.agents.base import ActingState, AgentState, Normaliser, Params
 from lili.agents.core import SACCore, core_jit, sg
-from lili.agents.registry import register, register_options
+from lili.agents.registry import register
 from lili.agents.sac import SAC
 from lili.buffer import InteractionBuffer, sample
-from lili.config import AgentConfig, extra_options
+from lili.config import AgentConfig, dataclass_options
 from lili.dists import gaussian_kl, gaussian_logp, tanh_gaussian
 
-__all__ = ["SLAC", "SLACCore", "LatentModel", "SLAC_OPTIONS", "sample_sequences",
+__all__ = ["SLAC", "SLACCore", "LatentModel", "SLACOptions", "sample_sequences",
            "gather_sequences", "actor_input"]
 
-SLAC_OPTIONS: dict[str, Any] = {
-    "z1_dim": 32,
-    "z2_dim": 64,
-    "feature_dim": 64,
-    "model_hidden": [128, 128],
-    "sequence_length": 8,
-    "model_batch": 32,
-    "lr_model": 1e-4,
-    "decoder_std": math.sqrt(0.1),
-    "pretrain_steps": 1000,
-    "model_every": 1,
-}
-"""Defaults of SLAC's options, set as ``AgentConfig(extra={"slac": {...}})``.
+@dataclass(frozen=True)
+class SLACOptions:
+    """SLAC's options, set as ``AgentConfig(extra={"slac": {...}})``; each checked on
+    construction (ValueError naming ``extra.slac.<option>``, the value and what is allowed).
 
-- ``z1_dim``, ``z2_dim``: latent sizes (official 32 / 256; z2 here 64, see the module docstring).
-- ``feature_dim``: compressor output (official 8 * base_depth = 256; here 64).
-- ``model_hidden``: hidden widths of every model MLP (official 2 x 256; here 2 x 128).
-- ``sequence_length``: K, the actor's history and the filter length (official 8).
-- ``model_batch``: sequences per model step (official 32).
-- ``lr_model``: the model's Adam learning rate (official 1e-4).
-- ``decoder_std``: the fixed std of p(x | z) in standardised units (official sqrt(0.1)).
-- ``pretrain_steps``: model-only steps before the first RL update (official 100,000; see the
-  module docstring).
-- ``model_every``: one model step every this many updates (official 1).
-"""
+    - ``z1_dim``, ``z2_dim``: latent sizes (official 32 / 256; z2 here 64, see the module
+      docstring).
+    - ``feature_dim``: compressor output (official 8 * base_depth = 256; here 64).
+    - ``model_hidden``: hidden widths of every model MLP (official 2 x 256; here 2 x 128).
+    - ``sequence_length``: K, the actor's history and the filter length (official 8).
+    - ``model_batch``: sequences per model step (official 32).
+    - ``lr_model``: the model's Adam learning rate (official 1e-4).
+    - ``decoder_std``: the fixed std of p(x | z) in standardised units (official sqrt(0.1)).
+    - ``pretrain_steps``: model-only steps before the first RL update (official 100,000; see the
+      module docstring).
+    - ``model_every``: one model step every this many updates (official 1).
+    """
+
+    z1_dim: int = 32
+    z2_dim: int = 64
+    feature_dim: int = 64
+    model_hidden: tuple[int, ...] = (128, 128)
+    sequence_length: int = 8
+    model_batch: int = 32
+    lr_model: float = 1e-4
+    decoder_std: float = math.sqrt(0.1)
+    pretrain_steps: int = 1000
+    model_every: int = 1
+
+    def __post_init__(self) -> None:
+        def bad(name: str, allowed: str) -> ValueError:
+            return ValueError(f"config extra.slac.{name}={getattr(self, name)!r} is invalid; "
+                              f"allowed: {allowed}")
+
+        for name, low in (("z1_dim", 1), ("z2_dim", 1), ("feature_dim", 1),
+                          ("sequence_length", 1), ("model_batch", 1), ("pretrain_steps", 0),
+                          ("model_every", 1)):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
+                raise bad(name, f"an integer >= {low}")
+            object.__setattr__(self, name, int(v))
+        for name in ("lr_model", "decoder_std"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
+                raise bad(name, "a number > 0")
+            object.__setattr__(self, name, float(v))
+        hidden = self.model_hidden
+        if not isinstance(hidden, (list, tuple)) or not hidden or not all(
+            isinstance(h, (int, np.integer)) and not isinstance(h, bool) and h > 0 for h in hidden
+        ):
+            raise bad("model_hidden", "a non-empty list of positive integers")
+        object.__setattr__(self, "model_hidden", tuple(int(h) for h in hidden))
+
 
 MODEL_METRICS = ("rep_loss", "kl", "obs_nll", "rew_nll")
 """The model's metrics: ``rep_loss`` is the negative ELBO, the rest its parts."""
 
 _LEAK = 0.2  # TensorFlow's leaky_relu default, which the official networks use.
-
-
-def _options(config: AgentConfig) -> dict[str, Any]:
-    opts = extra_options(config, "slac", SLAC_OPTIONS, "SLAC")
-
-    def integer(name: str, low: int) -> int:
-        v = opts[name]
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
-            raise ValueError(f"config extra.slac.{name}={v!r} is invalid; allowed: an integer "
-                             f">= {low}")
-        return int(v)
-
-    def positive(name: str) -> float:
-        v = opts[name]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0:
-            raise ValueError(f"config extra.slac.{name}={v!r} is invalid; allowed: a number > 0")
-        return float(v)
-
-    hidden = opts["model_hidden"]
-    if not isinstance(hidden, (list, tuple)) or not hidden or not all(
-        isinstance(h, (int, np.integer)) and not isinstance(h, bool) and h > 0 for h in hidden
-    ):
-        raise ValueError(f"config extra.slac.model_hidden={hidden!r} is invalid; allowed: a "
-                         "non-empty list of positive integers")
-    return {
-        "z1_dim": integer("z1_dim", 1), "z2_dim": integer("z2_dim", 1),
-        "feature_dim": integer("feature_dim", 1), "model_hidden": tuple(int(h) for h in hidden),
-        "sequence_length": integer("sequence_length", 1), "model_batch": integer("model_batch", 1),
-        "lr_model": positive("lr_model"), "decoder_std": positive("decoder_std"),
-        "pretrain_steps": integer("pretrain_steps", 0), "model_every": integer("model_every", 1),
-    }
 
 
 # -- sequences -----------------------------------------------------------------------------------
@@ -324,7 +322,7 @@ class SLACCore(SACCore):
         if config.boundary not in (None, "bootstrap", "cut"):
             raise ValueError(f"config boundary={config.boundary!r} is invalid for SLAC; allowed: "
                              "bootstrap, cut or null (= bootstrap)")
-        self.options = _options(config)
+        self.options: SLACOptions = dataclass_options(config, "slac", SLACOptions)
         super().__init__(obs_dim, act_dim, horizon, config, boundary)
         self.jit_model_step = partial(core_jit("_model_step"), self)
         self.jit_model_batch = partial(core_jit("_model_batch"), self)
@@ -333,14 +331,14 @@ class SLACCore(SACCore):
     def _build(self) -> None:
         super()._build()
         o = self.options
-        self.seq_len = o["sequence_length"]
-        self.lvm = LatentModel(self.x_dim, o["z1_dim"], o["z2_dim"], o["feature_dim"],
-                               o["model_hidden"])
-        self.opt_slac = optax.adam(o["lr_model"])
+        self.seq_len = o.sequence_length
+        self.lvm = LatentModel(self.x_dim, o.z1_dim, o.z2_dim, o.feature_dim,
+                               o.model_hidden)
+        self.opt_slac = optax.adam(o.lr_model)
 
     def _input_dims(self) -> tuple[int, int]:
         o, k, phase = self.options, self.seq_len, int(self.config.phase_feature)
-        return o["z1_dim"] + o["z2_dim"] + phase, k * self.x_dim + (k - 1) * self.act_dim
+        return o.z1_dim + o.z2_dim + phase, k * self.x_dim + (k - 1) * self.act_dim
 
     def _init_aux(self, key: jax.Array) -> dict[str, Any]:
         # One compiled call: run eagerly, every initialiser compiles on its own (~15 s here).
@@ -368,8 +366,8 @@ class SLACCore(SACCore):
         lvm, o = self.lvm, self.options
         n, frames = x.shape[0], x.shape[1]
         k1, k2 = jax.random.split(key)
-        e1 = jax.random.normal(k1, (frames, n, o["z1_dim"]))
-        e2 = jax.random.normal(k2, (frames, n, o["z2_dim"]))
+        e1 = jax.random.normal(k1, (frames, n, o.z1_dim))
+        e2 = jax.random.normal(k2, (frames, n, o.z2_dim))
         feat = lvm.apply(params, x, method=LatentModel.features)
         m1, s1 = lvm.apply(params, feat[:, 0], method=LatentModel.first_posterior)
         z1 = m1 + s1 * e1[0]
@@ -397,7 +395,7 @@ class SLACCore(SACCore):
         """The negative ELBO of sequences (fields ``win_*`` of :func:`gather_sequences`, [N, ...])
         and its parts, each a sum over time and dims, mean over sequences."""
         lvm = self.lvm
-        log_std_x = jnp.log(self.options["decoder_std"])
+        log_std_x = jnp.log(self.options.decoder_std)
         x = self._frames_x(norm, seq["win_obs"], seq["win_t"], seq["win_valid"])
         a = seq["win_act"]
         r = norm.rew(seq["win_rew"])
@@ -427,7 +425,7 @@ class SLACCore(SACCore):
 
     def _model_batch(self, arrays: dict[str, jax.Array], count: jax.Array,
                      key: jax.Array) -> dict[str, jax.Array]:
-        seq = sample_sequences(arrays, count, key, self.options["model_batch"], 1, self.seq_len)
+        seq = sample_sequences(arrays, count, key, self.options.model_batch, 1, self.seq_len)
         return {k: v[:, 0] for k, v in seq.items() if k.startswith("win_")}
 
     # -- SAC hooks -------------------------------------------------------------------------------
@@ -487,7 +485,7 @@ class SLACCore(SACCore):
         # One model step on its own batch and optimiser, then the SAC step; the critic's latents
         # were sampled in _batch from the model before this step (as in the official train step).
         k_model = jax.random.fold_in(key, 1)
-        every = self.options["model_every"]
+        every = self.options.model_every
 
         def model_step(s):
             return self._model_step(s.aux["slac"], s.aux["opt_slac"], s.norm, batch["model"],
@@ -542,7 +540,7 @@ class SLACCore(SACCore):
         steps (a function of the state, so a resumed run repeats exactly what it would have).
         The first block's metrics then carry ``pretrain_first`` and ``pretrain_last``, the
         pretraining's first and last loss."""
-        steps = self.options["pretrain_steps"]
+        steps = self.options.pretrain_steps
         extra: dict[str, float] = {}
         if steps > 0 and int(state.updates) == 0:
             state, losses = self.pretrain(state, buffer, steps, jax.random.fold_in(key, 1))
@@ -585,7 +583,7 @@ class SLAC(SAC):
     """Stochastic Latent Actor-Critic, the LILI paper's POMDP baseline (module docstring).
 
     ``SLAC(env, AgentConfig(extra={"slac": {"model_every": 2}}))`` changes one option of
-    :data:`SLAC_OPTIONS`. Its acting state carries the interaction's history: start each
+    :class:`SLACOptions`. Its acting state carries the interaction's history: start each
     interaction with :meth:`initial_state` and pass on what :meth:`predict` returns.
     """
 
@@ -593,5 +591,4 @@ class SLAC(SAC):
     core_cls = SLACCore
 
 
-register("slac", SLAC)
-register_options("slac", _options)
+register("slac", SLAC, options=SLACOptions)

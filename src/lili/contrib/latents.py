@@ -32,7 +32,7 @@ from lili.agents.base import AgentState, Normaliser, Params
 from lili.agents.core import sg
 from lili.agents.latent import decoder_loss, window_part
 from lili.agents.lili import LILI, LILICore
-from lili.agents.registry import register, register_options
+from lili.agents.registry import register
 from lili.buffer import Batch, Window
 from lili.config import AgentConfig, dataclass_options
 from lili.contrib.nets import QuantisedEncoder, nearest_code, straight_through_one_hot
@@ -289,9 +289,7 @@ def _variant(core: type[_VariantCore], doc: str) -> type[LILI]:
     """The facade of ``core``'s variant, registered under its algo with its options' check."""
     cls = type(core.__name__.replace("Core", "LILI"), (LILI,),
                {"algo": core.algo, "core_cls": core, "__doc__": doc, "__module__": __name__})
-    register(core.algo, cls)
-    register_options(core.algo, lambda config: dataclass_options(config, core.algo,
-                                                                 core.options_cls))
+    register(core.algo, cls, options=core.options_cls)
     return cls
 
 

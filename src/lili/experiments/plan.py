@@ -14,7 +14,8 @@ from typing import Any
 
 import yaml
 
-from lili.config import AgentConfig, stored_agent_config
+from lili.agents.registry import config_for, reads, stored_config
+from lili.config import AgentConfig
 from lili.envs.core import resolve_env_id
 from lili.errors import shown
 from lili.experiments.presets import PRESETS, Preset
@@ -80,7 +81,7 @@ def _expand_one(preset: Preset, out: Path, seeds: int, interactions: int | None,
                                      experiment=out / group.folder,
                                      env=group.env, algo=algo, seed=seed, interactions=budget,
                                      env_kwargs={**group.env_kwargs, **extra_env},
-                                     config={**group.config, **extra_config}))
+                                     config={**group.config, **config_for(algo, extra_config)}))
     return specs
 
 
@@ -94,8 +95,9 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
     ``quick``: :data:`QUICK_INTERACTIONS` interactions, 1 seed and :data:`QUICK_CONFIG`, unless
     ``seeds`` / ``interactions`` are given. ``algos`` keeps only those algos, ``envs`` only
     those envs (registered ids or aliases, e.g. ``influence-drift``). ``overrides``:
-    agent-config fields set in every run, over the preset's own (``lili reproduce --set``; an
-    ablation, so give it its own ``--out``). ``env_kwargs``: env options set in every run,
+    agent-config fields set, over the preset's own, in every run whose algo reads them
+    (``lili reproduce --set``; an ablation, so give it its own ``--out``); ValueError when no
+    algo of the plan reads one. ``env_kwargs``: env options set in every run,
     over the preset's own (``lili reproduce --env-kwarg``, e.g. the old air hockey game with
     ``aim_noise=0.02``); every env of the plan must take them (narrow it with ``envs``).
     Raises ValueError for a bad value, or when an existing run folder holds another config.
@@ -136,6 +138,7 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
                 raise ValueError(f"presets {known.preset!r} and {spec.preset!r} define the run "
                                  f"{spec.run_dir} differently")
     result = list(specs.values())
+    _check_overrides(overrides or {}, tuple(dict.fromkeys(s.algo for s in result)))
     if env_kwargs:
         _check_env_kwargs(result, env_kwargs)
     from lili.agents import check_config  # here: it imports JAX, which --dry-run need not
@@ -145,6 +148,24 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
         check_config(spec.algo, AgentConfig.from_dict(spec.config))
         run_status(spec)
     return result
+
+
+def _check_overrides(overrides: dict[str, Any], algos: tuple[str, ...]) -> None:
+    """ValueError naming the field unless some algo of the plan reads each ``--set`` field
+    (and each ``extra`` entry is one of the plan's algos): a field no run takes would be
+    ignored."""
+    if not algos:
+        return
+    for name, value in overrides.items():
+        if name == "extra" and isinstance(value, dict):
+            for key in value:
+                if key not in algos:
+                    raise ValueError(f"--set extra.{key} is read by no algo of this plan "
+                                     f"({', '.join(algos)}); allowed: extra.<one of them>")
+        elif not any(name in reads(a) for a in algos):
+            allowed = sorted(set().union(*(reads(a) for a in algos)))
+            raise ValueError(f"--set {name}={value!r} is read by no algo of this plan "
+                             f"({', '.join(algos)}); allowed: {', '.join(allowed)}")
 
 
 def _check_env_kwargs(specs: list[RunSpec], given: dict[str, Any]) -> None:
@@ -186,7 +207,7 @@ def run_status(spec: RunSpec) -> str:
     for key, value in want.items():
         have = old.get(key) if isinstance(old, dict) else None
         if key == "agent":
-            have = stored_agent_config(have)
+            have = stored_config(spec.algo, have)
         if have != value:
             detail = (_diff(have, value) if key == "agent"
                       else f"{shown(have)} there, {shown(value)} here")

@@ -31,11 +31,13 @@ XLA_FLAGS = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
 
 
 def _config_path(spec: RunSpec) -> Path:
-    return spec.experiment / "agent_config.yaml"
+    # One per algo: a preset's --set reaches only the algos that read the field.
+    return spec.experiment / f"agent_config-{spec.algo}.yaml"
 
 
 def write_agent_configs(specs: list[RunSpec]) -> None:
-    """Write each experiment folder's ``agent_config.yaml`` (the ``--config`` of its runs)."""
+    """Write each experiment folder's ``agent_config-<algo>.yaml`` (the ``--config`` of its
+    runs of that algo)."""
     written: dict[Path, dict] = {}
     for spec in specs:
         if not spec.config:
