@@ -8,10 +8,12 @@ import pytest
 
 import lili.envs  # noqa: F401  (registers the envs)
 from lili.agents import LILI, SAC, CheckpointError, Oracle, make_agent
+from lili.agents.registry import config_for
 from lili.config import AgentConfig, load_config
 from lili.dists import tanh_gaussian
 
 SMALL = AgentConfig(hidden=(32, 32), enc_hidden=(16, 16), latent_dim=3)
+SMALL_SAC = config_for("sac", SMALL)  # SAC and the Oracle read no latent field
 GAMMA = SMALL.gamma
 
 
@@ -97,7 +99,7 @@ def test_same_z_reading_is_available_as_an_option():
 
 def test_sac_bootstraps_from_the_next_interaction():
     env = gym.make("lili/PointMass-v0")
-    agent = SAC(env, SMALL, seed=0)
+    agent = SAC(env, SMALL_SAC, seed=0)
     batch = _batch(agent, np.random.default_rng(1))
     batch.pop("window")
     key = jax.random.PRNGKey(3)
@@ -114,7 +116,7 @@ def test_sac_bootstraps_from_the_next_interaction():
     # boundary_discount="horizon": an interaction that ended at step 20 of H still discounts
     # the next one as if it had run to H; a full-length one (t = H - 1) as before.
     early = dict(batch, t=batch["t"].at[1, 2].set(20))
-    padded = SAC(env, SMALL.replace(boundary_discount="horizon"), seed=0)
+    padded = SAC(env, SMALL_SAC.replace(boundary_discount="horizon"), seed=0)
     y_p = np.asarray(padded.core.critic_target(padded.state, early, key))
     discount = np.full((2, 3), GAMMA)
     discount[1, 2] = GAMMA ** (agent.horizon - 20)
@@ -127,14 +129,14 @@ def test_sac_bootstraps_from_the_next_interaction():
 
 def test_oracle_sees_the_strategy_and_lili_does_not():
     env = gym.make("lili/PointMass-v0")
-    oracle = Oracle(env, SMALL)
+    oracle = Oracle(env, SMALL_SAC)
     assert oracle.obs_dim == 4
     assert LILI(gym.make("lili/PointMass-v0"), SMALL).obs_dim == 2
 
 
 def test_load_rejects_corrupt_and_mismatched_files(tmp_path):
     env = gym.make("lili/PointMass-v0")
-    path = SAC(env, SMALL).save(tmp_path / "sac.msgpack")
+    path = SAC(env, SMALL_SAC).save(tmp_path / "sac.msgpack")
     with pytest.raises(CheckpointError, match="holds a 'sac' agent"):
         LILI.load(path, env)
     with pytest.raises(CheckpointError, match="obs_dim=2"):

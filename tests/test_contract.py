@@ -11,6 +11,7 @@ from gymnasium import spaces
 
 from lili.agents import ActingState, load_agent, make_agent
 from lili.agents.registry import CORE_ALGOS as ALGOS  # the contrib algos: tests/test_contrib.py
+from lili.agents.registry import config_for
 from lili.config import AgentConfig
 from lili.envs import RepeatedInteractionEnv
 from lili.report import load_run
@@ -25,6 +26,7 @@ CONFIG = AgentConfig(hidden=(16, 16), enc_hidden=(8, 8), latent_dim=2, warmup_in
                                      "model_hidden": [8], "sequence_length": 2,
                                      "model_batch": 4, "pretrain_steps": 2},
                             "lilac": {"prior_window": 1}})
+"""One config for every algo; each is made with the part it reads (``config_for``)."""
 N = 5  # interactions per run
 
 
@@ -73,7 +75,7 @@ def _run(algo, tmp, seed=0, n=N, stop_at=None):
     """Train ``n`` interactions with a run folder under ``tmp``; with ``stop_at``, train that
     many, then resume from the folder in a fresh agent for the rest. Returns (agent, rows)."""
     folder = tmp / f"{algo}_{seed}_{stop_at}"
-    agent = make_agent(algo, Asymmetric(), CONFIG, seed)
+    agent = make_agent(algo, Asymmetric(), config_for(algo, CONFIG), seed)
     stream = Stream.for_agent(agent, agent.env)
     sd = 1
     first = stop_at if stop_at is not None else n
@@ -82,7 +84,7 @@ def _run(algo, tmp, seed=0, n=N, stop_at=None):
     logger.close()
     if stop_at is None:
         return agent, rows, folder
-    again = make_agent(algo, Asymmetric(), CONFIG, seed)
+    again = make_agent(algo, Asymmetric(), config_for(algo, CONFIG), seed)
     stream2 = Stream.for_agent(again, again.env)
     start = resume_run(folder, again, stream2, sd)
     assert start == stop_at // CONFIG.checkpoint_every * CONFIG.checkpoint_every

@@ -15,6 +15,7 @@ import yaml
 
 from lili import cli
 from lili.agents.registry import CORE_ALGOS as ALGOS  # the contrib algos: tests/test_contrib.py
+from lili.agents.registry import config_for
 from lili.envs import ENV_ALIASES
 
 SMALL = {
@@ -30,7 +31,7 @@ SMALL = {
 @pytest.mark.parametrize("alias", sorted(ENV_ALIASES))
 def test_every_algo_trains_on_every_env(alias: str, algo: str, tmp_path: Path) -> None:
     cfg = tmp_path / "small.yaml"
-    cfg.write_text(yaml.safe_dump(SMALL))
+    cfg.write_text(yaml.safe_dump(config_for(algo, SMALL)))  # a --config is for one algo
     out = tmp_path / "runs"
     assert cli.main(["train", alias, "--algo", algo, "--interactions", "5", "--out", str(out),
                      "--config", str(cfg), "--no-progress"]) == 0

@@ -15,6 +15,7 @@ from gymnasium import spaces
 
 from lili import cli
 from lili.agents import make_agent
+from lili.agents.registry import config_for
 from lili.buffer import _available_memory, buffer_nbytes
 from lili.config import AgentConfig
 from lili.envs import RepeatedInteractionEnv
@@ -52,9 +53,9 @@ def _same_state(a: Any, b: Any) -> None:
 def _alone_and_together(algo: str, env: Any, n: int):
     alone = []
     for seed in SEEDS:
-        agent = make_agent(algo, env(), CONFIG, seed)
+        agent = make_agent(algo, env(), config_for(algo, CONFIG), seed)
         alone.append((agent, train(agent, Stream.for_agent(agent, agent.env), n)))
-    agents = [make_agent(algo, env(), CONFIG, seed) for seed in SEEDS]
+    agents = [make_agent(algo, env(), config_for(algo, CONFIG), seed) for seed in SEEDS]
     rows = train_many(agents, group_streams(agents), n)
     return alone, agents, rows
 
@@ -163,11 +164,11 @@ def test_a_killed_group_resumes_to_the_same_numbers(tmp_path, monkeypatch):
 
 
 def test_a_group_that_cannot_share_a_program_is_refused():
-    sac = make_agent("sac", "lili/PointMass-v0", CONFIG, 0)
+    sac = make_agent("sac", "lili/PointMass-v0", config_for("sac", CONFIG), 0)
     lili = make_agent("lili", "lili/PointMass-v0", CONFIG, 1)
     with pytest.raises(ValueError, match="shares one algo: 'sac' and 'lili'"):
         check_group([sac, lili])
-    short = make_agent("sac", _EarlyEnd(), CONFIG, 1)
+    short = make_agent("sac", _EarlyEnd(), config_for("sac", CONFIG), 1)
     with pytest.raises(ValueError, match="seed 1 has another observation size than seed 0"):
         check_group([sac, short])
 

@@ -10,6 +10,7 @@ import pytest
 
 from lili.agents import make_agent
 from lili.agents.multiseed import stack, unstack, update_blocks
+from lili.agents.registry import config_for
 from lili.config import AgentConfig
 from lili.train import Stream, interaction_keys, train
 
@@ -19,7 +20,8 @@ CONFIG = AgentConfig(hidden=(32, 32), enc_hidden=(16, 16), latent_dim=3, warmup_
 
 @pytest.mark.parametrize("algo", ["sac", "lili"])
 def test_two_seeds_in_one_program_match_two_single_seed_runs(algo):
-    agents = [make_agent(algo, "lili/PointMass-v0", CONFIG, seed) for seed in (0, 1)]
+    config = config_for(algo, CONFIG)
+    agents = [make_agent(algo, "lili/PointMass-v0", config, seed) for seed in (0, 1)]
     streams = [Stream.for_agent(a, a.env) for a in agents]
     for a, s in zip(agents, streams, strict=True):
         train(a, s, 4)  # warm-up, normaliser, one block each

@@ -16,6 +16,7 @@ import pytest
 
 from lili.agents import LILI, SAC, Oracle
 from lili.agents.base import env_horizon
+from lili.agents.registry import config_for
 from lili.config import AgentConfig
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -36,6 +37,16 @@ def small_config(tmp_path_factory) -> Path:
 
     path = tmp_path_factory.mktemp("cfg") / "small.yaml"
     path.write_text(yaml.safe_dump(SMALL))
+    return path
+
+
+@pytest.fixture(scope="module")
+def small_sac_config(tmp_path_factory) -> Path:
+    """SMALL without the latent fields, which SAC and the Oracle do not read."""
+    import yaml
+
+    path = tmp_path_factory.mktemp("cfg") / "small_sac.yaml"
+    path.write_text(yaml.safe_dump(config_for("sac", SMALL)))
     return path
 
 
@@ -79,21 +90,21 @@ def test_the_horizon_comes_from_a_time_limit():
 def test_an_env_without_a_strategy_trains_sac_and_lili_and_the_oracle_refuses_it():
     cfg = AgentConfig.from_dict({**SMALL, "updates_per_step": 0.05})
     for cls in (SAC, LILI):
-        agent = cls(gym.make("Pendulum-v1"), cfg).learn(3)
+        agent = cls(gym.make("Pendulum-v1"), config_for(cls.algo, cfg)).learn(3)
         assert agent.num_interactions == 3
         assert np.isfinite(agent.train_block(agent.stream.buffer,
                                              __import__("jax").random.PRNGKey(0))["critic_loss"])
     with pytest.raises(ValueError, match="the Oracle needs the partner's true strategy"):
-        Oracle(gym.make("Pendulum-v1"), cfg)
+        Oracle(gym.make("Pendulum-v1"), config_for("oracle", cfg))
 
 
-def test_lili_train_pendulum_from_the_shell(tmp_path, small_config):
+def test_lili_train_pendulum_from_the_shell(tmp_path, small_sac_config):
     out = _lili("train", "Pendulum-v1", "--algo", "sac", "--interactions", "3", "--out", "r",
-                "--config", str(small_config), "--no-progress", cwd=tmp_path)
+                "--config", str(small_sac_config), "--no-progress", cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert "reports no partner strategy" in out.stdout
     out = _lili("train", "Pendulum-v1", "--algo", "oracle", "--interactions", "3", "--out",
-                "r", "--config", str(small_config), cwd=tmp_path)
+                "r", "--config", str(small_sac_config), cwd=tmp_path)
     assert out.returncode == 2 and out.stderr.count("\n") == 1, out.stderr
     assert "the Oracle needs the partner's true strategy" in out.stderr
     assert not (tmp_path / "r" / "Pendulum-v1" / "oracle").exists()

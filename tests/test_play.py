@@ -303,12 +303,13 @@ def test_lagged_agents_play_and_the_oracle_is_refused(tmp_path):
     """The last-interaction Oracle acts on the session's env wrapped as in training (the last
     shot appended); the Oracle, told each shot's mode before it is played, is refused."""
     from lili.agents import make_agent
+    from lili.agents.registry import config_for
     from lili.play.bot import run_bot
 
     env = gym.make("lili/AirHockey-v0")
     for algo, config in (("oracle-last", {**SMALL, "extra": {"oracle-last": {"outcome": True}}}),
                          ("oracle", SMALL)):
-        make_agent(algo, env, config, seed=0).save(tmp_path / f"{algo}.msgpack")
+        make_agent(algo, env, config_for(algo, config), seed=0).save(tmp_path / f"{algo}.msgpack")
     lagged = Blocker.load(tmp_path / "oracle-last.msgpack", make_play_env({}))
     session = GameSession(lagged, {}, 3)
     assert session.env.observation_space.shape == (9,) and lagged.latent_dim == 0

@@ -24,6 +24,7 @@ from test_play import SMALL, make_run_folder, untrained_agent_file
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import connect
 
+from lili.agents.registry import config_for
 from lili.play.policy import Blocker
 from lili.play.record import Recorder
 from lili.play.server import WS_MAX_BYTES, ServerThread, create_app
@@ -287,7 +288,7 @@ def live(tmp_path_factory):
     from lili.agents import make_agent
 
     root = tmp_path_factory.mktemp("live")
-    agent = make_agent("sac", gym.make("lili/AirHockey-v0"), SMALL, seed=0)
+    agent = make_agent("sac", gym.make("lili/AirHockey-v0"), config_for("sac", SMALL), seed=0)
     run = make_run_folder(root, agent.save(root / "sac.msgpack"), algo="sac")
     server = LivePlay(run, root / "shots.csv")
     yield server

@@ -12,6 +12,7 @@ import yaml
 import lili.envs  # noqa: F401
 from lili import cli
 from lili.agents import LILI, SAC, Oracle
+from lili.agents.registry import config_for
 from lili.config import AgentConfig
 from lili.evaluate import Episodes, evaluate
 from lili.report import find_runs
@@ -21,6 +22,7 @@ from lili.train import Stream, plays_at_random, train
 
 FAST = {"hidden": [32, 32], "enc_hidden": [16, 16], "latent_dim": 3, "warmup_interactions": 3,
         "checkpoint_every": 4, "batch_interactions": 8, "per_interaction": 4}
+FAST_SAC = config_for("sac", FAST)  # SAC and the Oracle read no latent field
 
 
 def _rows(path):
@@ -105,7 +107,7 @@ def test_random_interactions_are_drawn_from_the_seed_and_played_at_random():
     # In the loop: after the warm-up an interaction drawn at random plays the warm-up's
     # uniform actions (from the same (seed, interaction) generator), the others the policy's.
     agent = SAC(gym.make("lili/InfluenceDrift-v0"),
-                AgentConfig.from_dict({**FAST, "random_interactions": 0.5}), seed=2)
+                AgentConfig.from_dict({**FAST_SAC, "random_interactions": 0.5}), seed=2)
     rows = _loop(agent, 12)
     buf = agent.stream.buffer
     chosen = [i for i in range(3, 12) if plays_at_random(2, i, 3, 0.5)]
@@ -120,7 +122,7 @@ def test_random_interactions_are_drawn_from_the_seed_and_played_at_random():
 
 def test_summary_gives_the_policys_own_final_numbers_beside_all(tmp_path, capsys):
     cfg = tmp_path / "random.yaml"
-    cfg.write_text(yaml.safe_dump({**FAST, "random_interactions": 0.5}))
+    cfg.write_text(yaml.safe_dump({**FAST_SAC, "random_interactions": 0.5}))
     n, warmup = 30, FAST["warmup_interactions"]
     assert _train(tmp_path, str(cfg), algo="sac", n=n) == 0
     run = tmp_path / "Driving2D-v0" / "sac" / "seed_0"
@@ -158,7 +160,7 @@ def test_evaluate_reports_per_interaction_metrics():
 def test_episodes_give_the_oracle_the_strategy_it_trained_with():
     # A bare env handed to the step-by-step driver must be wrapped as in training: the Oracle
     # acting on observations without the strategy gave wrong actions and no error.
-    agent = Oracle(gym.make("lili/InfluenceDrift-v0"), AgentConfig.from_dict(FAST))
+    agent = Oracle(gym.make("lili/InfluenceDrift-v0"), AgentConfig.from_dict(FAST_SAC))
     bare = Episodes(agent, gym.make("lili/InfluenceDrift-v0"), seed=3)
     assert bare.obs.shape == (agent.obs_dim,)
     played = [float(bare.play()["ret"]) for _ in range(3)]
@@ -197,6 +199,6 @@ class _Endless(gym.Env):
 def test_training_on_an_env_that_breaks_the_contract_fails_clearly():
     from lili.envs.checker import EnvContractError
 
-    agent = SAC(_Endless(), AgentConfig.from_dict(FAST))
+    agent = SAC(_Endless(), AgentConfig.from_dict(FAST_SAC))
     with pytest.raises(EnvContractError, match="did not end within the env's horizon \\(3"):
         _loop(agent, 1)

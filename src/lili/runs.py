@@ -36,8 +36,8 @@ import yaml
 
 import lili
 from lili.agents import CheckpointError, load_agent
-from lili.agents.sac import SAC
 from lili.agents.registry import stored_config
+from lili.agents.sac import SAC
 from lili.config import AgentConfig
 from lili.errors import shown
 from lili.metrics_file import (

@@ -67,7 +67,6 @@ Choices the papers leave open, and why (options live in ``AgentConfig.extra["lil
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import flax.linen as nn
 import jax

@@ -189,10 +189,14 @@ def check_extra(config: AgentConfig) -> None:
         agent_options(key, config)
 
 
-def config_for(algo: str, config: dict[str, Any]) -> dict[str, Any]:
-    """The part of ``config`` (a mapping of :class:`AgentConfig` fields meant for several
-    algos, such as ``lili reproduce --set``) that ``algo`` reads: its fields and
-    ``extra[algo]``. Imports no agent."""
+def config_for(algo: str, config: Any) -> Any:
+    """The part of ``config`` that ``algo`` reads: its fields and ``extra[algo]``, of a config
+    meant for several algos (``lili reproduce --set``, one sweep over algos). ``config``: a
+    mapping of :class:`AgentConfig` fields (a mapping is returned) or an :class:`AgentConfig`
+    (one is returned, the fields ``algo`` does not read at their defaults). Imports no
+    agent."""
+    if isinstance(config, AgentConfig):
+        return AgentConfig.from_dict(config_for(algo, config.to_dict()))
     out = {k: v for k, v in config.items() if k in reads(algo)}
     extra = config.get("extra")
     if isinstance(extra, dict) and algo in extra:

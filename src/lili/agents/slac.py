@@ -70,8 +70,8 @@ what makes a fixed decoder std meaningful for state vectors. Changes of scale, w
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from collections.abc import Sequence
+from dataclasses import dataclass
 from functools import partial
 from typing import Any
 
