@@ -210,7 +210,13 @@ def test_variant_options_are_checked_by_name_and_value():
     with pytest.raises(ValueError, match=r"unknown lili-quantised option\(s\) 'code'.*codes"):
         make_agent("lili-quantised", env, SMALL.replace(extra={"lili-quantised": {"code": 3}}))
     with pytest.raises(ValueError, match=r"extra.lili-quantised.codes=1 .*integer >= 2"):
-        check_config("lili", SMALL.replace(extra={"lili-quantised": {"codes": 1}}))
+        check_config("lili-quantised", SMALL.replace(extra={"lili-quantised": {"codes": 1}}))
+    with pytest.raises(ValueError, match=r"extra.lili-quantised is invalid: it is not read by "
+                                         r"lili \(it would be ignored\)"):
+        check_config("lili", SMALL.replace(extra={"lili-quantised": {"codes": 4}}))
+    with pytest.raises(ValueError, match=r"config critic_to_encoder=0.5 is not read by "
+                                         r"lili-prediction-critic"):
+        check_config("lili-prediction-critic", SMALL.replace(critic_to_encoder=0.5))
     with pytest.raises(ValueError, match=r"extra.lili-bottleneck.weight=0 .*> 0"):
         check_config("lili-bottleneck", SMALL.replace(extra={"lili-bottleneck": {"weight": 0}}))
     with pytest.raises(ValueError, match=r"extra.lili-categorical.balance=-1 .*>= 0"):

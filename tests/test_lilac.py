@@ -47,7 +47,7 @@ def test_registered_and_defaults():
     assert isinstance(a, LILAC) and a.algo == "lilac"
     # Defaults: a 2-interaction prior window, the critic on the prior's latent, bootstrapping
     # at the boundary with the latent of the next interaction.
-    assert a.history == 2 and a.options["critic_latent"] == "prior" and a.boundary == "influence"
+    assert a.history == 2 and a.options.critic_latent == "prior" and a.boundary == "influence"
 
 
 def test_posterior_and_prior_shapes(agent):
@@ -207,7 +207,7 @@ def test_save_load_round_trip(agent, tmp_path):
     ({"lilac": {"prior_window": 0}}, "prior_window=0"),
     ({"lilac": {"kl_weight": -1}}, "kl_weight=-1"),
     ({"lilac": {"critic_latent": "both"}}, "critic_latent='both'"),
-    ({"lilac": {"window": 3}}, "unknown LILAC option"),
+    ({"lilac": {"window": 3}}, "unknown lilac option"),
     ({"lilac": [1]}, "extra.lilac"),
     ({"lilac": {"prior_window": 3}}, "warmup_interactions=3 is invalid for LILAC"),
     ({"lilac": {"prior_window": True}}, "prior_window=True"),

@@ -206,7 +206,7 @@ def test_save_load_round_trip_gives_identical_actions(trained, tmp_path):
 
 
 @pytest.mark.parametrize("bad, match", [
-    ({"extra": {"slac": {"z3_dim": 4}}}, "unknown SLAC option\\(s\\) 'z3_dim'"),
+    ({"extra": {"slac": {"z3_dim": 4}}}, "unknown slac option\\(s\\) 'z3_dim'"),
     ({"extra": {"slac": {"sequence_length": 0}}}, "sequence_length=0 is invalid"),
     ({"extra": {"slac": {"model_hidden": []}}}, "model_hidden=\\[\\] is invalid"),
     ({"extra": {"slac": {"lr_model": -1}}}, "lr_model=-1 is invalid"),

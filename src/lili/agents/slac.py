@@ -145,6 +145,13 @@ class SLACOptions:
             raise bad("model_hidden", "a non-empty list of positive integers")
         object.__setattr__(self, "model_hidden", tuple(int(h) for h in hidden))
 
+    def check(self, config: AgentConfig) -> None:
+        """ValueError unless ``config.boundary`` is one SLAC takes (the latent-switching modes
+        of LILI do not apply)."""
+        if config.boundary not in (None, "bootstrap", "cut"):
+            raise ValueError(f"config boundary={config.boundary!r} is invalid for SLAC; allowed: "
+                             "bootstrap, cut or null (= bootstrap)")
+
 
 MODEL_METRICS = ("rep_loss", "kl", "obs_nll", "rew_nll")
 """The model's metrics: ``rep_loss`` is the negative ELBO, the rest its parts."""
@@ -319,10 +326,8 @@ class SLACCore(SACCore):
 
     def __init__(self, obs_dim: int, act_dim: int, horizon: int, config: AgentConfig,
                  boundary: str | None = None) -> None:
-        if config.boundary not in (None, "bootstrap", "cut"):
-            raise ValueError(f"config boundary={config.boundary!r} is invalid for SLAC; allowed: "
-                             "bootstrap, cut or null (= bootstrap)")
         self.options: SLACOptions = dataclass_options(config, "slac", SLACOptions)
+        self.options.check(config)
         super().__init__(obs_dim, act_dim, horizon, config, boundary)
         self.jit_model_step = partial(core_jit("_model_step"), self)
         self.jit_model_batch = partial(core_jit("_model_batch"), self)
