@@ -1,3 +1,4 @@
+# Over 400 lines: a parser and a handler per subcommand, each checking its input before writing.
 """Command line: ``lili train | eval | report | check-env | play``.
 
 Every bad input ends with one line ``lili: error: ...`` naming the value and what is allowed,

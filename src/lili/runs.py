@@ -1,3 +1,4 @@
+# Over 400 lines: the run folder's one reader and writer (config, metrics, checkpoints, resume).
 """Run folders: ``<out>/<env>/<algo>/seed_<k>/`` with config, metrics, TensorBoard, checkpoints.
 
 - ``config.yaml``: the resolved configuration (env id and kwargs, algo, seed, budget, agent).

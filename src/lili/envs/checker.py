@@ -1,3 +1,4 @@
+# Over 400 lines: the contract's checks in the order check_env runs them, each with its message.
 """Check that an env honours the repeated-interaction contract (``lili check-env``).
 
 :func:`check_env` is for users' own envs: an env that passes it trains with every algorithm in

@@ -1,3 +1,4 @@
+# Over 400 lines: one env; its rules, geometry and measured constants (an 80-line docstring).
 """Air hockey (the paper's Section 5 and appendix "Robotic Air Hockey"), simulated in MuJoCo.
 
 The ego is the *blocker*, the partner the *striker*. Rules (the appendix) and the geometry
