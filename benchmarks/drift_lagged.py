@@ -66,10 +66,11 @@ from _results import RESULTS, check_result_name
 from gymnasium import spaces
 
 import lili.envs  # noqa: F401 - registers the envs
-from lili.agents import SAC, load_agent
+from lili.agents import SAC, check_config, load_agent
 from lili.agents.sac import SACCore
 from lili.buffer import InteractionBuffer
 from lili.cli import UsageError, parse_overrides
+from lili.config import AgentConfig
 from lili.dists import tanh_gaussian
 from lili.envs.influence import HELD
 from lili.envs.influence.drift import GOALS, drifted
@@ -374,7 +375,8 @@ def main() -> None:
     check_result_name(p, args.name)
     try:
         config = parse_overrides(args.set)
-    except UsageError as e:
+        check_config("sac", AgentConfig.from_dict(config))  # every variant here is SAC
+    except (UsageError, ValueError) as e:
         p.error(str(e))
     if args.interactions < 100:
         p.error(f"--interactions {args.interactions} is invalid; allowed: an integer >= 100")

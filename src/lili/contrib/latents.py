@@ -253,8 +253,8 @@ class PosteriorCore(_VariantCore):
 class PredictionCriticCore(_VariantCore):
     """The critic reads what z predicts, the decoder's means D(s_p, a_p, z) at :data:`PROBES`
     fixed probe inputs (normalised states from N(0, I), actions from U(-1, 1), a fixed
-    generator), detached, so the critic loss no longer shapes E (``critic_to_encoder`` is
-    then ignored). The actor and acting still read z."""
+    generator), detached, so the critic loss no longer shapes E (the algo does not read
+    ``critic_to_encoder``: setting it is an error). The actor and acting still read z."""
 
     algo = "lili-prediction-critic"
 
