@@ -11,6 +11,8 @@ import dataclasses
 from pathlib import Path
 
 import gymnasium as gym
+import jax
+import numpy as np
 import pytest
 import yaml
 
@@ -164,3 +166,41 @@ def test_every_committed_run_folder_reads_as_a_config_of_its_algo() -> None:
             continue
         check_config(cfg["algo"], AgentConfig.from_dict(cfg["agent"]))
     assert moved < len(folders) // 4
+
+
+# A valid value away from the default for every field (LOOP_FIELDS aside: every algo reads them).
+AWAY = {"gamma": 0.5, "boundary_discount": "horizon", "tau": 0.5, "lr_actor": 1e-2,
+        "lr_critic": 1e-2, "lr_alpha": 1e-2, "hidden": (8,), "batch_interactions": 3,
+        "per_interaction": 3, "updates_per_step": 2.0, "target_entropy": -0.5,
+        "init_alpha": 0.5, "phase_feature": False, "normalize": False, "boundary": "cut",
+        "lr_encoder": 1e-2, "lr_decoder": 1e-2, "enc_hidden": (8,), "latent_dim": 3,
+        "history": 2, "encoder_transitions": 2, "target_encoder": False,
+        "critic_to_encoder": 0.3, "rep_weight": 5.0}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("algo", ["random", "sac", "slac", "lilac", "oracle-last",
+                                  "lili-prediction-critic"])  # every other algo reads them all
+def test_the_fields_an_algo_does_not_read_change_none_of_its_numbers(algo) -> None:
+    """What ``reads`` leaves out is what the algo ignores: an agent built past the check with
+    every such field away from its default trains to the same numbers. (A run folder of an
+    earlier release is read with those fields back at their defaults, so this is what keeps
+    its resume exact.)"""
+    from test_contract import CONFIG, Asymmetric, _numbers
+
+    from lili.train import Stream, train
+
+    assert set(AWAY) == FIELDS - LOOP_FIELDS
+    config = config_for(algo, CONFIG)
+    unread = {k: v for k, v in AWAY.items() if k not in reads(algo)}
+    assert unread, algo
+    numbers = []
+    for changed in (config, config.replace(**unread)):
+        agent = make_agent(algo, Asymmetric(), config, seed=4)
+        agent.config = changed  # past check_config, which refuses it
+        agent.core = agent._make_core()
+        agent.state = agent.core.init(jax.random.PRNGKey(4))
+        numbers.append(_numbers(train(agent, Stream.for_agent(agent, agent.env), 5)))
+    if algo != "random":  # the last interactions ran updates: their losses are compared too
+        assert np.isfinite(numbers[0][-1][1]), numbers[0][-1]
+    np.testing.assert_array_equal(numbers[0], numbers[1])
