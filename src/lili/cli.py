@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from lili.errors import bounded, shown
+from lili.limits import MAX_GROUP
 
 __all__ = ["main"]
 
@@ -136,10 +137,6 @@ def _strategy_dim(env: Any) -> int:
     space = getattr(env.unwrapped, "strategy_space", None)
     shape = getattr(space, "shape", None)
     return int(shape[0]) if shape and len(shape) == 1 else 0
-
-
-MAX_GROUP = 4096
-"""Most runs ``lili train --seeds`` trains in one program."""
 
 
 def _parse_seeds(spec: str) -> list[int]:
@@ -334,7 +331,8 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
               progress=False if args.no_progress else None,
               overrides=parse_overrides(args.set),
               env_kwargs=_parse_kwargs(args.env_kwarg),
-              check_only=args.check_only, sources=args.sources)
+              check_only=args.check_only, sources=args.sources, group=args.group,
+              device=args.device)
     return 0
 
 
@@ -434,6 +432,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="env option for every run, e.g. aim_noise=0.02 (repeatable; every env "
                         "of the plan must take it: choose them with --envs; give it its own "
                         "--out)")
+    x.add_argument("--group", type=int, metavar="K",
+                   help="train up to K seeds of a cell (same env, algo and config) together in "
+                        "one process (lili.many; default 1 on a CPU, 64 on a GPU)")
+    x.add_argument("--device", metavar="{cpu,gpu}",
+                   help="JAX platform of the runs' processes (default: JAX's choice); with "
+                        "gpu, several processes share the GPU (no memory preallocation)")
     x.add_argument("--dry-run", action="store_true", help="list the runs and the CPU-hours")
     x.add_argument("--report-only", action="store_true",
                    help="start nothing; write an interim report from the finished runs")

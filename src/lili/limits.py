@@ -7,7 +7,7 @@ from __future__ import annotations
 import numbers
 from typing import Any
 
-__all__ = ["MAX_INTERACTIONS", "MAX_SEEDS", "MAX_JOBS", "check_count"]
+__all__ = ["MAX_INTERACTIONS", "MAX_SEEDS", "MAX_JOBS", "MAX_GROUP", "check_count"]
 
 MAX_INTERACTIONS = 10_000_000
 """Most interactions of one run (the paper's longest runs are 10**4)."""
@@ -15,6 +15,9 @@ MAX_SEEDS = 1_000
 """Most seeds per run group of ``lili reproduce``."""
 MAX_JOBS = 1_024
 """Most runs at a time."""
+MAX_GROUP = 4_096
+"""Most runs trained together in one program (``lili train --seeds``, ``lili reproduce
+--group``)."""
 
 
 def check_count(value: Any, flag: str, high: int, low: int = 1) -> int:

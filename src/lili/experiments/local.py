@@ -1,33 +1,34 @@
-"""Local backend: up to ``jobs`` ``lili train`` processes at a time on this machine."""
+"""Local backend: up to ``jobs`` ``lili train`` processes at a time on this machine, each
+training one job (:data:`lili.experiments.runner.Job`: one run, or seeds trained together)."""
 
 from __future__ import annotations
 
 import subprocess
 
-from lili.experiments.plan import RunSpec
-from lili.experiments.runner import start
+from lili.experiments.runner import Job, start
 
 __all__ = ["LocalBackend"]
 
 
 class LocalBackend:
-    """Runs each :class:`RunSpec` as a child process; :meth:`poll` reports finished ones."""
+    """Runs each job as a child process; :meth:`poll` reports finished ones."""
 
     description = "local processes"
 
-    def __init__(self, jobs: int) -> None:
+    def __init__(self, jobs: int, device: str | None = None) -> None:
         self.capacity = jobs
-        self._running: dict[RunSpec, subprocess.Popen] = {}
+        self.device = device
+        self._running: dict[Job, subprocess.Popen] = {}
 
-    def submit(self, spec: RunSpec) -> None:
-        """Start ``spec`` now."""
-        self._running[spec] = start(spec)
+    def submit(self, job: Job) -> None:
+        """Start ``job`` now."""
+        self._running[job] = start(job, self.device)
 
-    def poll(self) -> list[tuple[RunSpec, int]]:
-        """(spec, exit code) of every run that ended since the last call."""
-        ended = [(s, p.returncode) for s, p in self._running.items() if p.poll() is not None]
-        for spec, _ in ended:
-            del self._running[spec]
+    def poll(self) -> list[tuple[Job, int]]:
+        """(job, exit code) of every job that ended since the last call."""
+        ended = [(j, p.returncode) for j, p in self._running.items() if p.poll() is not None]
+        for job, _ in ended:
+            del self._running[job]
         return ended
 
     def close(self) -> None:

@@ -1,4 +1,5 @@
-"""Ray backend: each run is one Ray task (one CPU), retried when its worker dies.
+"""Ray backend: each job (one run, or seeds trained together) is one Ray task (one CPU),
+retried when its worker dies.
 
 ``address=None`` starts a Ray instance on this machine (bound to 127.0.0.1, no dashboard);
 an address joins a running cluster (``ray start --head`` on one node, ``ray start --address``
@@ -16,8 +17,7 @@ import socket
 from pathlib import Path
 
 from lili.errors import shown
-from lili.experiments.plan import RunSpec
-from lili.experiments.runner import run_blocking
+from lili.experiments.runner import Job, run_blocking
 
 __all__ = ["RayBackend", "RAY_MISSING", "check_address"]
 
@@ -73,7 +73,8 @@ def _probe(folder: str, token: str) -> str:
 class RayBackend:
     """Submits runs as Ray tasks; :meth:`poll` reports finished ones."""
 
-    def __init__(self, address: str | None, jobs: int | None, out: Path) -> None:
+    def __init__(self, address: str | None, jobs: int | None, out: Path,
+                 device: str | None = None) -> None:
         ray = _import_ray()
         self.ray = ray
         self._started = address is None
@@ -89,6 +90,7 @@ class RayBackend:
         cpus = int(ray.cluster_resources().get("CPU", 1))
         self.capacity = jobs or cpus
         self.description = f"Ray ({'local, ' if self._started else ''}{cpus} CPUs)"
+        self.device = device
         self._task = ray.remote(num_cpus=1, max_retries=MAX_RETRIES)(run_blocking)
         self._refs: dict = {}
         self._check_shared(out)
@@ -111,23 +113,23 @@ class RayBackend:
                              "machine does not see the file; allowed: a folder on a "
                              "filesystem every Ray node shares, at the same path")
 
-    def submit(self, spec: RunSpec) -> None:
-        """Queue ``spec`` as a task (one CPU, retried when its worker dies)."""
-        self._refs[self._task.remote(spec)] = spec
+    def submit(self, job: Job) -> None:
+        """Queue ``job`` as a task (one CPU, retried when its worker dies)."""
+        self._refs[self._task.remote(job, self.device)] = job
 
-    def poll(self) -> list[tuple[RunSpec, int]]:
-        """(spec, exit code) of every task that ended since the last call."""
+    def poll(self) -> list[tuple[Job, int]]:
+        """(job, exit code) of every task that ended since the last call."""
         if not self._refs:
             return []
         ready, _ = self.ray.wait(list(self._refs), num_returns=len(self._refs), timeout=0)
         ended = []
         for ref in ready:
-            spec = self._refs.pop(ref)
+            job = self._refs.pop(ref)
             try:
                 code = int(self.ray.get(ref))
-            except Exception:  # retries used up: report it as a failed run
+            except Exception:  # retries used up: report it as a failed job
                 code = -1
-            ended.append((spec, code))
+            ended.append((job, code))
         return ended
 
     def close(self) -> None:

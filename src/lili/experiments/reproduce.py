@@ -1,5 +1,6 @@
 """``lili reproduce``: expand a preset, skip finished runs, resume started ones, run the rest
-on local processes or Ray tasks, then write the preset's report."""
+on local processes or Ray tasks (one process per job: one run, or ``--group`` seeds of one cell
+trained together by :mod:`lili.many`), then write the preset's report."""
 
 from __future__ import annotations
 
@@ -8,22 +9,57 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from lili.errors import shown
 from lili.experiments.costs import estimate_seconds
 from lili.experiments.plan import RunSpec, plan, run_status
 from lili.experiments.presets import get_preset
 from lili.experiments.progress import SweepProgress
-from lili.experiments.runner import log_path, rows_logged, write_agent_configs
-from lili.limits import MAX_JOBS, check_count
+from lili.experiments.runner import (
+    DEVICES,
+    Job,
+    group_runs,
+    log_path,
+    rows_logged,
+    write_agent_configs,
+)
+from lili.limits import MAX_GROUP, MAX_JOBS, check_count
 from lili.runs import check_out_dir
 
 __all__ = ["reproduce", "LOCAL_JOBS"]
 
 LOCAL_JOBS = 2
 RAY_LOCAL = "local"
+GPU_GROUP = 64
+"""Runs per job on a GPU when ``--group`` is not given: one program serves a cell's seeds
+(issue 33's H200 measurement: the update block's throughput grows up to K = 1024)."""
+
+
+def default_group(device: str | None) -> int:
+    """Runs per job when ``--group`` is not given: one on the CPU, where K runs in one
+    process have not been measured cheaper than K processes on two cores
+    (``benchmarks/many_runs.py --processes``), and :data:`GPU_GROUP` on a GPU."""
+    return GPU_GROUP if device == "gpu" else 1
+
+
+def check_device(device: str | None) -> None:
+    """ValueError unless ``device`` is None or one of :data:`DEVICES` that JAX sees here."""
+    if device is None:
+        return
+    if device not in DEVICES:
+        raise ValueError(f"--device {shown(device)} is invalid; allowed: {', '.join(DEVICES)}")
+    if device == "gpu":
+        import jax
+
+        try:
+            jax.devices("gpu")
+        except RuntimeError:
+            raise ValueError("--device gpu: JAX sees no GPU on this machine; allowed: cpu, or "
+                             "a machine with JAX's CUDA build (pip install 'jax[cuda12]')") \
+                from None
 
 
 def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: int,
-             say: Callable[[str], None]) -> dict[str, Any]:
+             say: Callable[[str], None], group: int = 1) -> dict[str, Any]:
     todo = [s for s in specs if status[s] != "done"]
     estimates = {s: estimate_seconds(s, rows_logged(s) if status[s] == "resume" else 0)
                  for s in todo}
@@ -46,6 +82,9 @@ def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: 
         algos = sorted(((v, a) for (p, a), v in by_algo.items() if p == preset), reverse=True)
         say(f"  {preset}: {sec / 3600:.1f} CPU-hours ("
             + ", ".join(f"{a} {v / 3600:.1f}" for v, a in algos) + ")")
+    if group > 1:
+        say(f"  {len(group_runs(todo, group))} jobs with --group {group} (the estimate is "
+            "per run, one process each: runs trained together may cost less)")
     say(f"{name}: {len(specs)} runs ({len(todo)} to run, {len(specs) - len(todo)} done); "
         f"estimated {seconds / 3600:.1f} CPU-hours, about {wall / 3600:.1f} h of "
         f"wall time with {jobs} jobs (from measured per-run costs, lili.experiments.costs)")
@@ -53,23 +92,23 @@ def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: 
             "by_preset": {k: v / 3600 for k, v in by_preset.items()}}
 
 
-def _make_backend(ray: str | None, jobs: int | None, out: Path):
+def _make_backend(ray: str | None, jobs: int | None, out: Path, device: str | None):
     if ray is None:
         from lili.experiments.local import LocalBackend
 
-        return LocalBackend(jobs or LOCAL_JOBS)
+        return LocalBackend(jobs or LOCAL_JOBS, device)
     from lili.experiments.ray_backend import RayBackend
 
-    return RayBackend(None if ray == RAY_LOCAL else ray, jobs, out)
+    return RayBackend(None if ray == RAY_LOCAL else ray, jobs, out, device)
 
 
-def _start_backend(ray: str | None, jobs: int | None, out: Path):
+def _start_backend(ray: str | None, jobs: int | None, out: Path, device: str | None = None):
     """The backend, with ``out`` created for it; when it cannot start, the folders this made
     are removed again (a refused cluster leaves no empty ``--out``)."""
     missing = [p for p in (out, *out.parents) if not p.exists()]
     out.mkdir(parents=True, exist_ok=True)
     try:
-        return _make_backend(ray, jobs, out)
+        return _make_backend(ray, jobs, out, device)
     except BaseException:
         for folder in missing:  # deepest first; only while empty
             try:
@@ -92,6 +131,7 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
               overrides: dict[str, Any] | None = None, envs: tuple[str, ...] | None = None,
               report_only: bool = False, env_kwargs: dict[str, Any] | None = None,
               check_only: bool = False, sources: str | Path | None = None,
+              group: int | None = None, device: str | None = None,
               say: Callable[[str], None] = print) -> dict[str, Any]:
     """Run preset ``name`` into ``out`` and write ``out/<name>/report/``; see the module doc.
 
@@ -102,7 +142,10 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     finished (a long sweep's table so far). ``check_only``: start and write nothing; check the
     preset's claims (:mod:`lili.experiments.claims`) against the finished runs under ``out``
     (the preset layout) or, with ``sources``, the run folders a sources file names
-    (``benchmarks/results/claims_sources.yaml``). Every other report ends with the same claims
+    (``benchmarks/results/claims_sources.yaml``). ``group``: runs of one cell (same env, algo,
+    budget and config; their seeds differ) trained together in one process, at most this many
+    (:func:`default_group` when None); ``device``: ``"cpu"`` or ``"gpu"`` for the runs'
+    processes (None: JAX's default). Every other report ends with the same claims
     table, also written to ``out/<name>/report/claims.md``. Every value is checked and every
     existing run folder compared with the run it would become before anything is written; a bad one
     raises ValueError naming it. Runs that fail are listed (with their logs) in a ValueError
@@ -119,6 +162,13 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
                          "--check-only --sources FILE")
     if jobs is not None:
         check_count(jobs, "--jobs", MAX_JOBS)
+    if group is not None:
+        check_count(group, "--group", MAX_GROUP)
+    if ray is None:
+        check_device(device)
+    elif device is not None and device not in DEVICES:
+        raise ValueError(f"--device {shown(device)} is invalid; allowed: {', '.join(DEVICES)}")
+    group = group if group is not None else default_group(device)
     out = Path(out)
     check_out_dir(out)
     if ray is not None and ray != RAY_LOCAL:
@@ -131,7 +181,7 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     if dry_run and report_only:
         raise ValueError("--dry-run and --report-only are invalid together; allowed: one of them")
     if dry_run:
-        return _dry_run(name, specs, status, jobs or LOCAL_JOBS, say)
+        return _dry_run(name, specs, status, jobs or LOCAL_JOBS, say, group)
     changes = _changes(overrides, env_kwargs)
     if report_only:
         return _report_only(name, preset, specs, status, out, say, changes)
@@ -140,13 +190,18 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     todo = [s for s in specs if status[s] != "done"]
     t0 = time.time()
     if todo:
-        backend = _start_backend(ray, jobs, out)
+        jobs_todo = group_runs(todo, group)
+        backend = _start_backend(ray, jobs, out, device)
+        together = (f" as {len(jobs_todo)} jobs (up to {group} seeds of a cell in one process)"
+                    if len(jobs_todo) < len(todo) else "")
         say(f"{name}: {len(specs)} runs, {len(specs) - len(todo)} done, {len(todo)} to run on "
-            f"{backend.description}")
-        failed = _run_all(backend, todo, len(specs) - len(todo), progress)
+            f"{backend.description}{together}")
+        failed = _run_all(backend, jobs_todo, len(specs) - len(todo), progress)
         if failed:
-            lines = "\n".join(f"  {s.run_dir} (exit {c}; log {log_path(s)})" for s, c in failed)
-            raise ValueError(f"{len(failed)} of {len(todo)} runs failed:\n{lines}")
+            lines = "\n".join(f"  {s.run_dir} (exit {c}; log {log_path(j)})"
+                              for j, c in failed for s in j)
+            count = sum(len(j) for j, _ in failed)
+            raise ValueError(f"{count} of {len(todo)} runs failed:\n{lines}")
     else:
         say(f"{name}: all {len(specs)} runs are done")
     report = _write_report(preset, specs, out, say, changes=changes)
@@ -219,23 +274,26 @@ def _report_only(name: str, preset, specs: list[RunSpec], status: dict[RunSpec, 
     return {"runs": len(specs), "ran": 0, "report": report, "claims": claims}
 
 
-def _run_all(backend, todo: list[RunSpec], done: int,
-             progress: bool | None) -> list[tuple[RunSpec, int]]:
-    write_agent_configs(todo)
-    bar = SweepProgress(todo, done, live=progress)
+def _run_all(backend, todo: list[Job], done: int,
+             progress: bool | None) -> list[tuple[Job, int]]:
+    runs = [s for job in todo for s in job]
+    write_agent_configs(runs)
+    bar = SweepProgress(runs, done, live=progress)
     queue, failed, running = list(todo), [], 0
     try:
         while queue or running:
             while queue and running < backend.capacity:
-                spec = queue.pop(0)
-                bar.started(spec)
-                backend.submit(spec)
+                job = queue.pop(0)
+                for spec in job:
+                    bar.started(spec)
+                backend.submit(job)
                 running += 1
-            for spec, code in backend.poll():
+            for job, code in backend.poll():
                 running -= 1
-                bar.ended(spec, code, backend.capacity)
+                for spec in job:
+                    bar.ended(spec, code, backend.capacity)
                 if code != 0:
-                    failed.append((spec, code))
+                    failed.append((job, code))
             bar.refresh(backend.capacity)
             time.sleep(0.5)
     finally:

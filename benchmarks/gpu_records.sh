@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# The noise and history tables' missing cells (issue 34), trained once on a GPU machine:
+#
+#     OUT=/some/folder bash benchmarks/gpu_records.sh        # SMOKE=1: tiny budget, any CPU
+#
+# SAC and the Oracle against the noisy partner (sigma 0.4 and 1.0) and the history-dependent
+# one (N = 5 and 11), 3 seeds each, the preset's budget (2000 interactions) and config, through
+# `lili train --seeds 0-2` (lili.many: the Gymnasium envs and the same code path as on a CPU),
+# eight processes at once sharing the GPU (no XLA preallocation). The run folders land in the
+# layout of `lili reproduce noise|history` (noise/sigma_0.4/PointMass-v0/sac/seed_0, ...) and
+# come back as $OUT/records.tar.gz holding config.yaml, metrics.csv and summary.json of each
+# run (no checkpoints, no TensorBoard). Every process has the same time limit (CAP seconds); a
+# run cut short keeps its metrics.csv and has no summary.json.
+set -o pipefail
+cd "$(dirname "$0")/.."
+OUT=${OUT:-/tmp/gpu_records}
+PY=${PYTHON:-python3}
+CAP=${CAP:-240}
+mkdir -p "$OUT"
+LOG="$OUT/records_log.txt"
+export XLA_PYTHON_CLIENT_PREALLOCATE=false
+export PYTHONPATH=${PYTHONPATH:-$PWD/src}
+RUNS=$(mktemp -d)
+if [ "${SMOKE:-0}" = 1 ]; then N=4; SEEDS=0-1; else N=2000; SEEDS=0-2; fi
+START=$(date +%s)
+pids=()
+for algo in sac oracle; do
+    for cell in "noise/sigma_0.4 step_noise=0.4" "noise/sigma_1 step_noise=1.0" \
+                "history/n_5 history=5" "history/n_11 history=11"; do
+        set -- $cell
+        mkdir -p "$RUNS/logs"
+        timeout --kill-after=10 "$CAP" "$PY" -m lili.cli train point-mass --algo "$algo" \
+            --seeds "$SEEDS" --interactions "$N" --env-kwarg "$2" --out "$RUNS/$1" \
+            --no-progress > "$RUNS/logs/${1//\//_}-$algo.log" 2>&1 &
+        pids+=($!)
+    done
+done
+for p in "${pids[@]}"; do wait "$p"; echo "process $p: rc=$?" >> "$LOG"; done
+echo "records: $(( $(date +%s) - START )) s for ${#pids[@]} processes" | tee -a "$LOG"
+tail -n 3 "$RUNS"/logs/*.log >> "$LOG"
+(cd "$RUNS" && find . \( -name config.yaml -o -name metrics.csv -o -name summary.json \) \
+    -path '*seed_*' | tar czf "$OUT/records.tar.gz" -T -)
+find "$RUNS" -name summary.json | wc -l | xargs echo "finished runs:" | tee -a "$LOG"
