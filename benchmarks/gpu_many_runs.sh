@@ -23,6 +23,8 @@ mkdir -p "$OUT"
 LOG="$OUT/log.txt"
 START=$(date +%s)
 export XLA_PYTHON_CLIENT_PREALLOCATE=false
+# Steps that compile the same program (same K and sizes) reuse it from this cache.
+export JAX_COMPILATION_CACHE_DIR=${JAX_COMPILATION_CACHE_DIR:-/tmp/jax_cache_many_runs}
 export PYTHONPATH=$PWD/src
 if compgen -G ".whl/*.whl" > /dev/null; then
     "$PY" -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
@@ -38,8 +40,8 @@ if [ "${SMOKE:-0}" = 1 ]; then
     CONFIG=$(mktemp --suffix=.yaml)
     printf 'hidden: [32, 32]\nenc_hidden: [16, 16]\nwarmup_interactions: 3\nbuffer_capacity: 50\nbatch_interactions: 4\nper_interaction: 4\nupdates_per_step: 0.1\ncheckpoint_every: 5\n' > "$CONFIG"
     SIZE=(--config "$CONFIG")
-    JAX_KS=(1 2); JAX_NS=(2 2); SAC_KS=(2); SAC_NS=(2); GYM_KS=(1 2); GYM_NS=(2 2)
-    K72=3; N72=3; LEARN_SEEDS=0-1; LEARN_N=12
+    JAX_KS=(2); JAX_NS=(2); SAC_KS=(2); SAC_NS=(2); GYM_KS=(2); GYM_NS=(2)
+    K72=2; N72=3; LEARN_SEEDS=0-1; LEARN_N=12
     CAPS=(900 900 900 900 900)
 else
     SIZE=()

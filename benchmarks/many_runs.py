@@ -201,34 +201,34 @@ def main() -> None:
     rows: list[dict] = []
     out_dir = Path(args.out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    path = out_dir / f"{args.name}.json"
+    result = out_dir / f"{args.name}.json"
     head = {"algo": args.algo, "env": args.env, "env_kwargs": env_kwargs,
             "config": config.to_dict(), "budget": args.budget,
             "devices": [str(d) for d in jax.devices()], "device": jax.devices()[0].device_kind,
             "backend": jax.default_backend(), "platform": platform.platform(),
             "machine": platform.machine(), "cpus": os.cpu_count(), "jax": jax.__version__,
             "python": platform.python_version()}
-    for path in paths:
+    for which in paths:
         for k, n in zip(args.ks, ns, strict=True):
             try:
-                if path == "gym":
+                if which == "gym":
                     row = timed_gym(args.algo, args.env, k, n, config, env_kwargs)
                 else:
                     row = timed_jax(args.algo, args.env, k, n, config, env_kwargs, args.budget)
             except Exception as e:  # e.g. out of device memory at the largest K: keep the rest
-                row = {"path": path, "k": k, "error": f"{type(e).__name__}: {str(e)[:300]}"}
+                row = {"path": which, "k": k, "error": f"{type(e).__name__}: {str(e)[:300]}"}
             rows.append(row)
             print(_line(row), flush=True)
             # Written after every row: a run stopped by a time limit keeps what it measured.
-            path.write_text(json.dumps({**head, "rows": rows}, indent=2) + "\n")
+            result.write_text(json.dumps({**head, "rows": rows}, indent=2) + "\n")
             gc.collect()
-            if path == "gym" and args.processes and "error" not in row:
+            if which == "gym" and args.processes and "error" not in row:
                 proc = timed_processes(args.algo, args.env, k, n)
                 proc["ratio"] = round(row["interactions_per_s"] / proc["interactions_per_s"], 2)
                 rows.append(proc)
                 print(_line(proc) + f"  (one program / processes: {proc['ratio']}x)", flush=True)
-    path.write_text(json.dumps({**head, "rows": rows}, indent=2) + "\n")
-    print(f"wrote {path}")
+    result.write_text(json.dumps({**head, "rows": rows}, indent=2) + "\n")
+    print(f"wrote {result}")
 
 
 if __name__ == "__main__":
