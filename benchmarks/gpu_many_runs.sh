@@ -22,7 +22,7 @@ BUDGET=${BUDGET:-400}
 mkdir -p "$OUT"
 LOG="$OUT/log.txt"
 START=$(date +%s)
-export XLA_PYTHON_CLIENT_PREALLOCATE=false
+export XLA_PYTHON_CLIENT_PREALLOCATE=false XLA_PYTHON_CLIENT_MEM_FRACTION=0.9
 # Steps that compile the same program (same K and sizes) reuse it from this cache.
 export JAX_COMPILATION_CACHE_DIR=${JAX_COMPILATION_CACHE_DIR:-/tmp/jax_cache_many_runs}
 export PYTHONPATH=$PWD/src
@@ -49,7 +49,7 @@ else
     SAC_KS=(1 128 1024 4096); SAC_NS=(30 10 5 3)
     GYM_KS=(1 16 64); GYM_NS=(3 2 2)
     K72=72; N72=200; LEARN_SEEDS=0-7; LEARN_N=2000
-    CAPS=(120 50 90 80 70)
+    CAPS=(140 45 90 60 65)
 fi
 
 # step NAME CAP ARGS...: benchmarks/many_runs.py with at most CAP seconds and what is left.
@@ -65,7 +65,8 @@ step() {
 bench() { local name=$1 cap=$2; shift 2
     step "$name" "$cap" "$PY" benchmarks/many_runs.py --name "$name" --out-dir "$OUT" "${SIZE[@]}" "$@"; }
 
-bench jax_lili "${CAPS[0]}" --path jax --algo lili --ks "${JAX_KS[@]}" --interactions "${JAX_NS[@]}" --budget 2000
+# K = 4096 runs' buffers (10,000 interactions each) are 60 GB: let them take 80% of the GPU.
+bench jax_lili "${CAPS[0]}" --path jax --algo lili --ks "${JAX_KS[@]}" --interactions "${JAX_NS[@]}" --budget 2000 --memory-fraction 0.8
 bench jax_lili_k72 "${CAPS[1]}" --path jax --algo lili --ks "$K72" --interactions "$N72" --budget 2000
 
 # End to end through the command: LILI learning Point Mass, 8 seeds in one program, run folders
@@ -73,10 +74,10 @@ bench jax_lili_k72 "${CAPS[1]}" --path jax --algo lili --ks "$K72" --interaction
 RUNS=$(mktemp -d)
 step jax_learning "${CAPS[2]}" "$PY" -m lili.cli train point-mass --backend jax --algo lili \
     --seeds "$LEARN_SEEDS" --interactions "$LEARN_N" --out "$RUNS" --no-progress "${SIZE[@]}"
-"$PY" - "$RUNS" "$OUT/jax_learning.json" "$LEARN_N" <<'PY' 2>&1 | tee -a "$LOG"
+"$PY" - "$RUNS" "$OUT/jax_learning.json" "$LEARN_N" "${SIZE[*]:-paper sizes}" <<'PY' 2>&1 | tee -a "$LOG"
 import csv, json, sys
 from pathlib import Path
-runs, out, budget = Path(sys.argv[1]), Path(sys.argv[2]), int(sys.argv[3])
+runs, out, budget, sizes = Path(sys.argv[1]), Path(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
 seeds = {}
 for m in sorted(runs.glob("*/*/seed_*/metrics.csv")):
     rows = list(csv.DictReader(m.open()))
@@ -88,14 +89,14 @@ for m in sorted(runs.glob("*/*/seed_*/metrics.csv")):
         "first_100_policy_mean": sum(own[:100]) / max(1, len(own[:100])),
         "last_200_mean": sum(ret[-200:]) / max(1, len(ret[-200:])),
         "finished": (m.parent / "summary.json").exists()}
-res = {"what": "lili train point-mass --backend jax --algo lili (paper sizes), metrics.csv "
-       "of each seed", "budget": budget, "seeds": seeds}
+res = {"what": "lili train point-mass --backend jax --algo lili, metrics.csv of each seed",
+       "sizes": sizes, "budget": budget, "seeds": seeds}
 out.write_text(json.dumps(res, indent=2) + "\n")
 print(json.dumps(res))
 PY
 
-bench jax_sac "${CAPS[3]}" --path jax --algo sac --ks "${SAC_KS[@]}" --interactions "${SAC_NS[@]}" --budget 2000
-bench gym_lili "${CAPS[4]}" --path gym --algo lili --ks "${GYM_KS[@]}" --interactions "${GYM_NS[@]}"
+bench gym_lili "${CAPS[3]}" --path gym --algo lili --ks "${GYM_KS[@]}" --interactions "${GYM_NS[@]}"
+bench jax_sac "${CAPS[4]}" --path jax --algo sac --ks "${SAC_KS[@]}" --interactions "${SAC_NS[@]}" --budget 2000 --memory-fraction 0.8
 nvidia-smi --query-gpu=name,memory.used,memory.total --format=csv 2>&1 | tee -a "$LOG"
 echo "done in $(( $(date +%s) - START )) s; files in $OUT:" | tee -a "$LOG"
 ls -la "$OUT" | tee -a "$LOG"

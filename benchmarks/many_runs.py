@@ -4,7 +4,7 @@ JAX-native path.
     python benchmarks/many_runs.py [--path gym|jax|both] [--algo lili] [--env point-mass]
                                    [--ks 1 2 4 8] [--interactions 20] [--config small.yaml]
                                    [--env-kwarg step_noise=0.2] [--budget 2000] [--processes]
-                                   [--name many_runs] [--out-dir DIR]
+                                   [--memory-fraction 0.5] [--name many_runs] [--out-dir DIR]
 
 For each path and each K, K runs of ``--algo`` (seeds 0..K-1; the paper's sizes unless
 ``--config`` changes them) train together:
@@ -105,13 +105,13 @@ def timed_gym(algo: str, env: str, k: int, n: int, config, env_kwargs: dict) -> 
 
 
 def timed_jax(algo: str, env: str, k: int, n: int, config, env_kwargs: dict,
-              budget: int | None) -> dict:
+              budget: int | None, fraction: float = 0.5) -> dict:
     """K runs through :class:`lili.jax_train.JaxRuns` (module docstring)."""
     from lili.buffer import buffer_nbytes
     from lili.jax_train import JaxRuns
 
     t = time.perf_counter()
-    runs = JaxRuns(algo, env, list(range(k)), config, env_kwargs)
+    runs = JaxRuns(algo, env, list(range(k)), config, env_kwargs, fraction=fraction)
     warm = runs.config.warmup_interactions + 1
     runs.train(warm, keep_rows=False)
     first = time.perf_counter() - t
@@ -183,6 +183,9 @@ def main() -> None:
     p.add_argument("--budget", type=int, help="extrapolate K runs of this many interactions "
                                               "(JAX path)")
     p.add_argument("--processes", action="store_true", help="also K separate processes (gym)")
+    p.add_argument("--memory-fraction", type=float, default=0.5,
+                   help="JAX path: the share of the device's free memory the K replay buffers "
+                        "may take (default 0.5)")
     p.add_argument("--name", default="many_runs")
     p.add_argument("--out-dir", default=str(RESULTS))
     p.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
@@ -214,7 +217,8 @@ def main() -> None:
                 if which == "gym":
                     row = timed_gym(args.algo, args.env, k, n, config, env_kwargs)
                 else:
-                    row = timed_jax(args.algo, args.env, k, n, config, env_kwargs, args.budget)
+                    row = timed_jax(args.algo, args.env, k, n, config, env_kwargs, args.budget,
+                                    args.memory_fraction)
             except Exception as e:  # e.g. out of device memory at the largest K: keep the rest
                 row = {"path": which, "k": k, "error": f"{type(e).__name__}: {str(e)[:300]}"}
             rows.append(row)

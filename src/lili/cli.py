@@ -289,9 +289,6 @@ def _train_jax(args: argparse.Namespace, env_id: str, seeds: list[int], config: 
     from lili.jax_train import JaxRuns, check_jax_run
     from lili.runs import RunLogger
 
-    if args.resume:
-        raise UsageError("--resume with --backend jax is not supported yet; train the run "
-                         "again, or resume runs of the Gymnasium path (--backend gym)")
     try:
         check_jax_run(args.algo, env_id)
     except ValueError as e:
@@ -302,17 +299,26 @@ def _train_jax(args: argparse.Namespace, env_id: str, seeds: list[int], config: 
     except ValueError as e:
         raise UsageError(f"--backend jax: {e}") from None
     dim = _strategy_dim(runs.agent.env)
-    loggers = [RunLogger(run_dir, resolved, dim, config.checkpoint_every)
+    start = runs.resume([run_dir for run_dir, _ in folders], dim) if args.resume else 0
+    if args.interactions < start:
+        raise UsageError(f"--interactions {args.interactions} is below the {start} the runs "
+                         "have already done")
+    # Everything is read and checked before a run folder is touched.
+    loggers = [RunLogger(run_dir, resolved, dim, config.checkpoint_every, start)
                for run_dir, resolved in folders]
     for seed, (run_dir, _) in zip(seeds, folders, strict=True):
-        print(f"training {args.algo} on {env_id} (seed {seed}, JAX) -> {run_dir}")
+        print(f"training {args.algo} on {env_id} (seed {seed}, JAX) -> {run_dir}"
+              + (f" (resumed at interaction {start})" if start else ""))
     try:
-        runs.train(args.interactions, loggers, progress=not args.no_progress, keep_rows=False)
+        runs.train(args.interactions - start, loggers, progress=not args.no_progress,
+                   keep_rows=False)
     except (KeyboardInterrupt, ValueError) as e:
         for logger in loggers:
             logger.close()
         if isinstance(e, KeyboardInterrupt):
-            print("interrupted; --backend jax does not resume: train the runs again")
+            every = config.checkpoint_every
+            print("interrupted; resume with the same command and --resume (from interaction "
+                  f"{runs.count // every * every})")
             return 130
         raise
     _finish(runs.agents(), runs.streams(), loggers, [resolved for _, resolved in folders])
@@ -442,7 +448,7 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--backend", choices=("gym", "jax"), default="gym",
                    help="gym: the Gymnasium env (default); jax: its JAX twin, all seeds as one "
                         "jitted program per interaction (sac, lili, lili-no-influence on "
-                        "point-mass, driving-2d and the influence envs; no --resume)")
+                        "point-mass, driving-2d and the influence envs)")
     t.add_argument("--no-progress", action="store_true", help="no progress bar")
     t.set_defaults(func=cmd_train)
 

@@ -27,8 +27,9 @@ report`` reads them as any other run. The one host step is the normaliser's fit 
 the warm-up (:meth:`~lili.agents.core.SACCore.fit_normaliser`, NumPy): that interaction takes
 two calls of the program (play; fit; learn without playing), every other interaction one.
 
-Checkpoints hold the agent and the run's interactions as ``lili train`` writes them; resuming a
-run of this path is not supported (``lili train --backend jax --resume`` says so).
+Checkpoints hold the agent and the run's interactions as ``lili train`` writes them; a group
+resumes (:meth:`JaxRuns.resume`, ``lili train --backend jax --resume``) by loading them and
+replaying each run's logged actions through its JAX env with the same keys.
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ from flax import struct
 from lili.agents.base import ActingState, AgentState
 from lili.agents.core import SACCore
 from lili.agents.facade import to_bounds
+from lili.agents.multiseed import stack
 from lili.buffer import _available_memory, _write, buffer_nbytes
 from lili.many import StackedBuffers, _windows, check_group_memory
 from lili.metrics_file import plays_at_random
@@ -102,6 +104,18 @@ def _device_free() -> int | None:
     return _available_memory()
 
 
+def _env_reset_key(root: jax.Array) -> jax.Array:
+    """The key of a run's env ``reset`` (its first strategy), from the run's root key."""
+    return jax.random.split(jax.random.fold_in(root, _ENV_STREAM))[0]
+
+
+def _env_keys(root: jax.Array, index: jax.Array) -> jax.Array:
+    """Interaction ``index``'s env keys: its steps', its random actions' and its successor's
+    start (three keys, from the run's root key)."""
+    play_root = jax.random.split(jax.random.fold_in(root, _ENV_STREAM))[1]
+    return jax.random.split(jax.random.fold_in(play_root, index), 3)
+
+
 def _play(core: SACCore, env: Any, bounds: jax.Array, index: jax.Array, play: jax.Array,
           state: AgentState, arrays: dict[str, jax.Array], count: jax.Array, env_state: Any,
           obs: jax.Array, acting: ActingState, params: Any, root: jax.Array,
@@ -109,8 +123,7 @@ def _play(core: SACCore, env: Any, bounds: jax.Array, index: jax.Array, play: ja
     """One run's interaction ``index``: played (one scan over the horizon) and stored in its
     buffer; with ``play`` False nothing changes (the warm-up's last interaction learns apart)."""
     act_key, _ = run_interaction_keys(root, index)
-    _, play_root = jax.random.split(jax.random.fold_in(root, _ENV_STREAM))
-    k_steps, k_random, k_next = jax.random.split(jax.random.fold_in(play_root, index), 3)
+    k_steps, k_random, k_next = _env_keys(root, index)
 
     def step(carry, t):
         o, es, ac = carry
@@ -185,6 +198,35 @@ def _program(core: SACCore, env: Any, carry: _Carry, params: Any, roots: jax.Arr
                   acting=acting), out
 
 
+@partial(jax.jit, static_argnums=(0, 1))
+def _replay(env: Any, horizon: int, params: Any, roots: jax.Array, bounds: jax.Array,
+            actions: jax.Array) -> tuple[jax.Array, Any]:
+    """Every run's env brought to the start of interaction n by replaying its logged actions
+    [K, n, H, ...] with the keys :func:`_play` drew them with: ``(obs, env state)``. Steps after
+    an interaction's end change nothing (the JAX env's rule), so the zero padding is harmless."""
+
+    def one(params, root, acts):
+        obs, state = env.reset(_env_reset_key(root), params)
+
+        def interaction(carry, x):
+            _, state = carry
+            index, acts_i = x
+            k_steps, _, k_next = _env_keys(root, index)
+
+            def step(state, t):
+                a = to_bounds(acts_i[t], bounds[0], bounds[1])
+                return env.step(jax.random.fold_in(k_steps, t), state, a, params)[1], None
+
+            state, _ = jax.lax.scan(step, state, jnp.arange(horizon))
+            return env.next_interaction(k_next, state, params), None
+
+        (obs, state), _ = jax.lax.scan(interaction, (obs, state),
+                                       (jnp.arange(acts.shape[0], dtype=jnp.int32), acts))
+        return obs, state
+
+    return jax.vmap(one)(params, roots, actions)
+
+
 class JaxRuns:
     """K runs of ``algo`` on the JAX twin of ``env``, one per seed, trained together
     (module docstring).
@@ -237,9 +279,8 @@ class JaxRuns:
         self.stacked = StackedBuffers(k, cfg.buffer_capacity, core.horizon, core.obs_dim,
                                       core.act_dim)
         states = jax.jit(jax.vmap(core.init))(self.roots)
-        reset_keys = jax.vmap(
-            lambda r: jax.random.split(jax.random.fold_in(r, _ENV_STREAM))[0])(self.roots)
-        obs, env_state = jax.jit(jax.vmap(self.env.reset))(reset_keys, self.params)
+        obs, env_state = jax.jit(jax.vmap(self.env.reset))(jax.vmap(_env_reset_key)(self.roots),
+                                                          self.params)
         self.carry = _Carry(states=states, arrays=self.stacked.arrays,
                             counts=jnp.zeros(k, jnp.int32), env_state=env_state, obs=obs,
                             acting=jax.vmap(core.initial_acting)(states))
@@ -279,6 +320,54 @@ class JaxRuns:
             a.state = jax.tree.map(lambda x, j=j: x[j], states)
         return self._agents
 
+    def resume(self, run_dirs: Sequence[Any], strategy_dim: int) -> int:
+        """Load every run's latest checkpoint from its folder (:func:`lili.runs.resume_run`:
+        agent, buffer, action log, checked against ``metrics.csv``) and bring its env to where
+        the run stopped by replaying the logged actions, so that training goes on with the
+        numbers of an uninterrupted run. Returns the interactions done (0: no checkpoint yet).
+        CheckpointError (from the folders) or ValueError when the runs stopped at different
+        interactions; nothing is written."""
+        from lili.agents.base import CheckpointError
+        from lili.runs import resume_run
+
+        if self.count:
+            raise ValueError("resume() restores fresh runs; these have trained already")
+        agents, streams = self.agents(), self.streams()
+        starts = [resume_run(d, a, s, strategy_dim)
+                  for d, a, s in zip(run_dirs, agents, streams, strict=True)]
+        if len(set(starts)) != 1:
+            raise ValueError(f"the runs' checkpoints are at different interactions "
+                             f"({sorted(set(starts))}); resume the runs of one point together")
+        n = starts[0]
+        if n == 0:
+            return 0
+        core, k = self.core, len(self)
+        actions = np.zeros((k, n, core.horizon, core.act_dim), np.float32)
+        for j, s in enumerate(streams):
+            for i, a in enumerate(s.action_log):
+                actions[j, i, :len(a)] = a
+        obs, env_state = _replay(self.env, core.horizon, self.params, self.roots, self.bounds,
+                                 jnp.asarray(actions))
+        slot = (n - 1) % self.stacked.capacity
+        stored = np.asarray(self.stacked.arrays["next_first_obs"][:, slot])
+        bad = ~np.isclose(np.asarray(obs), stored, atol=1e-5).all(-1)
+        if bad.any():
+            j = int(np.argmax(bad))
+            raise CheckpointError(f"replaying seed {self.seeds[j]}'s logged actions to resume "
+                                  "gave another observation than its checkpoint; was it trained "
+                                  "with other env kwargs or another version of the env?")
+        states = stack([a.state for a in agents])
+        self.carry = _Carry(states=states, arrays=self.stacked.arrays,
+                            counts=jnp.asarray(self.stacked.counts, jnp.int32),
+                            env_state=env_state, obs=obs,
+                            acting=jax.vmap(core.initial_acting)(states))
+        self.count = n
+        # The acting state the runs stopped with (z from their newest interactions).
+        self._call(n - 1, np.zeros(k, bool), False, False)
+        self.wall_time = max(s.wall_time for s in streams)
+        self.cpu_time = float(np.mean([s.cpu_time for s in streams]))
+        return n
+
     # -- training ------------------------------------------------------------------------------
     def _call(self, index: int, at_random: np.ndarray, play: bool, learn: bool) -> dict:
         self.carry, out = _program(self.core, self.env, self.carry, self.params, self.roots,
@@ -298,8 +387,7 @@ class JaxRuns:
         norms = [self.core.fit_normaliser(states, SimpleNamespace(
             count=self.count, capacity=self.stacked.capacity,
             arrays={k: v[j] for k, v in host.items()})).norm for j in range(len(self))]
-        norm = jax.tree.map(lambda *xs: jnp.stack(xs), *norms)
-        self.carry = self.carry.replace(states=states.replace(norm=norm))
+        self.carry = self.carry.replace(states=states.replace(norm=stack(norms)))
 
     def _at_random(self, i: int) -> np.ndarray:
         cfg = self.config
