@@ -210,7 +210,7 @@ def main() -> None:
             "devices": [str(d) for d in jax.devices()], "device": jax.devices()[0].device_kind,
             "backend": jax.default_backend(), "platform": platform.platform(),
             "machine": platform.machine(), "cpus": os.cpu_count(), "jax": jax.__version__,
-            "python": platform.python_version()}
+            "python": platform.python_version(), "load_average_at_start": os.getloadavg()}
     for which in paths:
         for k, n in zip(args.ks, ns, strict=True):
             try:
@@ -224,6 +224,7 @@ def main() -> None:
             rows.append(row)
             print(_line(row), flush=True)
             # Written after every row: a run stopped by a time limit keeps what it measured.
+            head["load_average_now"] = os.getloadavg()
             result.write_text(json.dumps({**head, "rows": rows}, indent=2) + "\n")
             gc.collect()
             if which == "gym" and args.processes and "error" not in row:

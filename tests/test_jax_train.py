@@ -140,10 +140,14 @@ def test_an_env_without_a_jax_twin_is_refused(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_point_mass_lili_learns_on_the_jax_path():
-    """The paper's sizes, 4 seeds x 600 interactions (about N minutes on 2 CPU cores)."""
+    """The paper's sizes, 4 seeds x 600 interactions: on the Gymnasium path LILI's Point Mass
+    runs are at -2 to -3 by then, SAC (the greedy baseline) ends near -5 and random play is
+    near -6. Not run on the shared 2-core machine (where four paper-size runs in one program
+    did 0.26 interactions per second under load: 2.6 hours); ``benchmarks/gpu_many_runs.sh``
+    trains 8 seeds for 2000 interactions on a GPU through the command."""
     runs = JaxRuns("lili", "point-mass", [0, 1, 2, 3])
     rows = runs.train(600)
     returns = np.array([[r["return"] for r in run] for run in rows])
     warmup = runs.config.warmup_interactions
     first, last = returns[:, :warmup].mean(), returns[:, -100:].mean()
-    assert last > first + 5.0, (first, last)
+    assert first < -4.5 and last > -4.0, (first, last)

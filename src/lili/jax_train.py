@@ -260,7 +260,13 @@ class JaxRuns:
         if len(self.env_kwargs) != k:
             raise ValueError(f"{k} seeds need one env kwargs mapping or {k}; got "
                              f"{len(self.env_kwargs)}")
-        made = [jax_envs.make(self.env_id, **kw) for kw in self.env_kwargs]
+        # Runs with the same env kwargs share one params pytree (4096 runs: one make).
+        made_by: dict[str, Any] = {}
+        for kw in self.env_kwargs:
+            key = repr(sorted(kw.items()))
+            if key not in made_by:
+                made_by[key] = jax_envs.make(self.env_id, **kw)
+        made = [made_by[repr(sorted(kw.items()))] for kw in self.env_kwargs]
         self.env = made[0][0]
         # The core and the action bounds are the Gymnasium agent's: one definition of both.
         self.agent = make_agent(algo, make_env(self.env_id, self.env_kwargs[0]), config,
@@ -274,7 +280,8 @@ class JaxRuns:
         each = buffer_nbytes(cfg.buffer_capacity, core.horizon, core.obs_dim, core.act_dim)
         check_group_memory(k, each, fraction, _device_free())
         self.params = jax_envs.stack([p for _, p in made])
-        self.bounds = jnp.stack([jnp.asarray(self.agent.act_low), jnp.asarray(self.agent.act_high)])
+        self.bounds = jnp.stack([jnp.asarray(self.agent.act_low),
+                                 jnp.asarray(self.agent.act_high)])
         self.roots = jnp.stack([jax.random.PRNGKey(s) for s in self.seeds])
         self.stacked = StackedBuffers(k, cfg.buffer_capacity, core.horizon, core.obs_dim,
                                       core.act_dim)
