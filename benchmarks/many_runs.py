@@ -18,7 +18,7 @@ For each path and each K, K runs of ``--algo`` (seeds 0..K-1; the paper's sizes 
 Each run first plays its warm-up and one more interaction (compiling everything; timed apart as
 ``first_s``), then ``--interactions`` more are timed (one value for every K, or one per K).
 Reported: interactions per second of all K runs together, env steps and updates per second, the
-replay buffer per run and, where the device reports it, the device's peak memory over K. With
+replay buffer per run and, where the device reports it, the device memory in use per run. With
 ``--budget N``, each JAX row also extrapolates the wall time of K runs of N interactions:
 ``first_s`` plus the timed seconds per interaction times the rest (labelled extrapolated; the
 buffers fill as the runs go on, which costs the block nothing: it samples a fixed batch). With
@@ -77,9 +77,10 @@ def _row(path: str, k: int, n: int, wall: float, first: float, steps: int, n_upd
            "env_steps_per_s": round(steps / wall, 1),
            "updates_per_s": round(k * n * n_updates / wall, 1),
            "buffer_mib_per_run": round(buffer_each / 2**20, 2)}
-    if "peak_bytes_in_use" in mem:
+    if "bytes_in_use" in mem:  # the K runs' live arrays, measured while they are alive
+        row["device_in_use_mib_per_run"] = round(mem["bytes_in_use"] / k / 2**20, 2)
+    if "peak_bytes_in_use" in mem:  # the process's peak so far (a larger K before counts)
         row["device_peak_mib"] = round(mem["peak_bytes_in_use"] / 2**20, 1)
-        row["device_peak_mib_per_run"] = round(mem["peak_bytes_in_use"] / k / 2**20, 2)
     return row
 
 
@@ -162,8 +163,8 @@ def _line(r: dict) -> str:
     line = (f"{r['path']:>11s} K={r['k']:5d}  {r['interactions_per_s']:9.2f} interactions/s "
             f"{r['env_steps_per_s']:11.1f} steps/s {r['updates_per_s']:10.1f} updates/s  "
             f"buffer {r['buffer_mib_per_run']} MiB/run  first {r['first_s']} s")
-    if "device_peak_mib_per_run" in r:
-        line += f"  device peak {r['device_peak_mib_per_run']} MiB/run"
+    if "device_in_use_mib_per_run" in r:
+        line += f"  device {r['device_in_use_mib_per_run']} MiB/run"
     if "extrapolated_budget_s" in r:
         line += (f"  {r['budget_interactions']} interactions: {r['extrapolated_budget_s']} s "
                  "(extrapolated)")
