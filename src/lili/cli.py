@@ -167,6 +167,9 @@ def _check_run_folder(args: argparse.Namespace, env_id: str, env_kwargs: dict[st
     run_dir = run_dir_for(args.out, env_id, args.algo, seed)
     resolved = {"env": env_id, "env_kwargs": env_kwargs, "algo": args.algo, "seed": seed,
                 "interactions": args.interactions, "agent": config.to_dict()}
+    backend = getattr(args, "backend", "gym")
+    if backend != "gym":  # the Gymnasium path's config.yaml stays as it was
+        resolved["backend"] = backend
     exists = (run_dir / "metrics.csv").exists()
     if exists and not args.resume:
         raise UsageError(f"run folder {run_dir} already holds a run; pass --resume to continue "
@@ -175,6 +178,10 @@ def _check_run_folder(args: argparse.Namespace, env_id: str, env_kwargs: dict[st
         raise UsageError(f"--resume: there is no run to resume in {run_dir}")
     if args.resume:
         old = read_run_config(run_dir)
+        if old.get("backend", "gym") != backend:
+            raise UsageError(f"--resume: the run in {run_dir} was trained with --backend "
+                             f"{old.get('backend', 'gym')}, not {backend}; its env's random "
+                             "draws differ, so it resumes only on that backend")
         for key in ("env", "env_kwargs", "algo", "seed", "agent"):
             if old.get(key) != resolved[key]:
                 raise UsageError(f"--resume: {key} differs from the run in {run_dir} "
@@ -203,6 +210,8 @@ def cmd_train(args: argparse.Namespace) -> int:
         raise UsageError(f"config file {str(args.config)!r}: {e}" if args.config
                          else str(e)) from None
     env_kwargs = _parse_kwargs(args.env_kwarg)
+    if args.backend == "jax":
+        return _train_jax(args, env_id, seeds, config, env_kwargs)
     folders = [_check_run_folder(args, env_id, env_kwargs, config, seed) for seed in seeds]
     envs = [_make_env(env_id, env_kwargs) for _ in seeds]
     agents = [make_agent(args.algo, env, config, seed) for env, seed in zip(envs, seeds,
@@ -254,9 +263,16 @@ def cmd_train(args: argparse.Namespace) -> int:
         for logger in loggers:
             logger.close()
         raise
-    for agent, stream, logger, run in zip(agents, streams, loggers, runs, strict=True):
-        summary = logger.finish(agent, stream, run[3])
-        line = (f"seed {agent.seed}: " if len(runs) > 1 else "") + \
+    _finish(agents, streams, loggers, [run[3] for run in runs])
+    return 0
+
+
+def _finish(agents: list[Any], streams: list[Any], loggers: list[Any],
+            configs: list[dict[str, Any]]) -> None:
+    """Each run's final checkpoint and summary.json, and its line on the terminal."""
+    for agent, stream, logger, config in zip(agents, streams, loggers, configs, strict=True):
+        summary = logger.finish(agent, stream, config)
+        line = (f"seed {agent.seed}: " if len(agents) > 1 else "") + \
             f"final return (last 10%): {summary['final_return']:.3f}"
         if summary["final_success"] is not None:
             line += f", success {summary['final_success']:.2f}"
@@ -266,6 +282,48 @@ def cmd_train(args: argparse.Namespace) -> int:
                 line += f", success {summary['final_success_policy']:.2f}"
             line += ")"
         print(line + f"; wall time {summary['wall_time_s']:.0f} s")
+
+
+def _train_jax(args: argparse.Namespace, env_id: str, seeds: list[int], config: Any,
+               env_kwargs: dict[str, Any]) -> int:
+    """``lili train --backend jax``: the seeds as one :class:`lili.jax_train.JaxRuns`, each
+    with its own run folder. Everything is checked before a folder is written."""
+    from lili.jax_train import JaxRuns, check_jax_run
+    from lili.runs import RunLogger
+
+    try:
+        check_jax_run(args.algo, env_id)
+    except ValueError as e:
+        raise UsageError(str(e)) from None
+    folders = [_check_run_folder(args, env_id, env_kwargs, config, seed) for seed in seeds]
+    try:
+        runs = JaxRuns(args.algo, env_id, seeds, config, env_kwargs)
+    except ValueError as e:
+        raise UsageError(f"--backend jax: {e}") from None
+    dim = _strategy_dim(runs.agent.env)
+    start = runs.resume([run_dir for run_dir, _ in folders], dim) if args.resume else 0
+    if args.interactions < start:
+        raise UsageError(f"--interactions {args.interactions} is below the {start} the runs "
+                         "have already done")
+    # Everything is read and checked before a run folder is touched.
+    loggers = [RunLogger(run_dir, resolved, dim, config.checkpoint_every, start)
+               for run_dir, resolved in folders]
+    for seed, (run_dir, _) in zip(seeds, folders, strict=True):
+        print(f"training {args.algo} on {env_id} (seed {seed}, JAX) -> {run_dir}"
+              + (f" (resumed at interaction {start})" if start else ""))
+    try:
+        runs.train(args.interactions - start, loggers, progress=not args.no_progress,
+                   keep_rows=False)
+    except (KeyboardInterrupt, ValueError) as e:
+        for logger in loggers:
+            logger.close()
+        if isinstance(e, KeyboardInterrupt):
+            every = config.checkpoint_every
+            print("interrupted; resume with the same command and --resume (from interaction "
+                  f"{runs.count // every * every})")
+            return 130
+        raise
+    _finish(runs.agents(), runs.streams(), loggers, [resolved for _, resolved in folders])
     return 0
 
 
@@ -390,6 +448,10 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--env-kwarg", action="append", default=[], metavar="KEY=VALUE",
                    help="env option, e.g. step_noise=0.2 or history=3 (repeatable)")
     t.add_argument("--resume", action="store_true", help="continue the run in the folder")
+    t.add_argument("--backend", choices=("gym", "jax"), default="gym",
+                   help="gym: the Gymnasium env (default); jax: its JAX twin, all seeds as one "
+                        "jitted program per interaction (sac, lili, lili-no-influence on "
+                        "point-mass, driving-2d and the influence envs)")
     t.add_argument("--no-progress", action="store_true", help="no progress bar")
     t.set_defaults(func=cmd_train)
 

@@ -53,8 +53,8 @@ from lili.train import (
     train,
 )
 
-__all__ = ["train_many", "check_group", "group_streams", "StackedBuffers", "BufferView",
-           "group_nbytes"]
+__all__ = ["train_many", "check_group", "check_group_memory", "group_streams", "StackedBuffers",
+           "BufferView", "group_nbytes"]
 
 
 def group_nbytes(agents: Sequence[Any]) -> int:
@@ -87,11 +87,17 @@ def check_group(agents: Sequence[Any], fraction: float = 0.5) -> None:
                     "horizon" if a.horizon != first.horizon else "agent config")
             raise ValueError(f"a run group shares one core: seed {a.seed} has another {what} "
                              f"than seed {first.seed}; group runs with equal sizes and config")
-    need = group_nbytes(agents)
-    free = _available_memory()
+    check_group_memory(len(agents), group_nbytes(agents) / len(agents), fraction)
+
+
+def check_group_memory(k: int, each: float, fraction: float = 0.5,
+                       free: int | None = None) -> None:
+    """ValueError (one line naming the sizes) when ``k`` replay buffers of ``each`` bytes take
+    more than ``fraction`` of ``free`` bytes (default: the host's available memory)."""
+    free = _available_memory() if free is None else free
+    need = k * each
     if free is not None and need > fraction * free:
-        each = need / len(agents)
-        raise ValueError(f"a group of {len(agents)} runs needs {need / 2**30:.2f} GiB of replay "
+        raise ValueError(f"a group of {k} runs needs {need / 2**30:.2f} GiB of replay "
                          f"buffers ({each / 2**20:.1f} MiB each), more than {fraction:.0%} of the "
                          f"{free / 2**30:.1f} GiB available; allowed: at most "
                          f"{max(1, int(fraction * free // each))} runs of this size per group")

@@ -27,7 +27,7 @@ from lili.env_calls import env_reset, env_step, where
 from lili.metrics_file import plays_at_random
 
 __all__ = ["train", "rollout", "Interaction", "Stream", "NonFiniteError", "interaction_keys",
-           "plays_at_random"]
+           "run_interaction_keys", "plays_at_random"]
 
 
 class NonFiniteError(ValueError):
@@ -97,7 +97,13 @@ def rollout(
 
 def interaction_keys(seed: int, i: int) -> tuple[jax.Array, jax.Array]:
     """(acting key, update key) of interaction ``i``."""
-    k = jax.random.fold_in(jax.random.PRNGKey(seed), i)
+    return run_interaction_keys(jax.random.PRNGKey(seed), i)
+
+
+def run_interaction_keys(root: jax.Array, i: Any) -> tuple[jax.Array, jax.Array]:
+    """(acting key, update key) of interaction ``i`` of the run whose root key is ``root``
+    (``PRNGKey(seed)``); pure JAX, so a jitted loop derives them as :func:`interaction_keys`."""
+    k = jax.random.fold_in(root, i)
     return tuple(jax.random.split(k))  # type: ignore[return-value]
 
 

@@ -34,7 +34,7 @@ from lili.agents.registry import AGENT_FORMAT, agent_options, check_config, load
 from lili.buffer import InteractionBuffer
 from lili.config import AgentConfig
 
-__all__ = ["AgentFacade"]
+__all__ = ["AgentFacade", "to_bounds"]
 
 def _as_config(config: Any) -> AgentConfig:
     if config is None:
@@ -59,6 +59,12 @@ def _as_env(env: Any) -> gym.Env:
         raise ValueError(f"env={env!r} is invalid; allowed: a gymnasium.Env or a registered env "
                          "id such as 'lili/PointMass-v0'")
     return env
+
+
+def to_bounds(a: Any, low: Any, high: Any) -> Any:
+    """An action in [-1, 1] mapped to the bounds [low, high] (NumPy or JAX arrays; the one
+    home of the mapping, also for the jitted loop of :mod:`lili.jax_train`)."""
+    return low + (a + 1.0) * 0.5 * (high - low)
 
 
 class AgentFacade:
@@ -151,8 +157,7 @@ class AgentFacade:
 
     def scale_action(self, a: np.ndarray) -> np.ndarray:
         """Map an action in [-1, 1] (the networks' range) to the env's action bounds."""
-        span = self.act_high - self.act_low
-        return self.act_low + (np.asarray(a, np.float32) + 1.0) * 0.5 * span
+        return to_bounds(np.asarray(a, np.float32), self.act_low, self.act_high)
 
     def act(self, observation: np.ndarray, state: ActingState, key: jax.Array,
             deterministic: bool) -> tuple[np.ndarray, ActingState]:
