@@ -499,7 +499,8 @@ def test_ship_script_at_a_tiny_budget_and_from_a_run(tmp_path, capsys):
     assert shipped.read_bytes() == out.read_bytes()
     meta = json.loads(shipped.with_suffix(".json").read_text())
     assert meta["interactions"] == 5 and meta["env_kwargs"] == {"aim_noise": 0.03}
-    assert meta["trained_by"].endswith("--interactions 5 --env-kwarg aim_noise=0.03")
+    assert "--interactions 5 --env-kwarg aim_noise=0.03 --config FILE  # FILE: " in \
+        meta["trained_by"] and "warmup_interactions: 3" in meta["trained_by"]
 
     cfg_file = run / "config.yaml"
     cfg_file.write_text(yaml.safe_dump({**yaml.safe_load(cfg_file.read_text()),

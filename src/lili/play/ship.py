@@ -101,9 +101,22 @@ def copy_from_run(run: str | Path, out: str | Path) -> tuple[Path, dict[str, Any
             "env_kwargs": env_kwargs, "config": cfg["agent"],
             "trained_by": f"lili train lili/AirHockey-v0 --algo {cfg['algo']} --seed "
                           f"{cfg['seed']} --interactions {done}"
-                          + "".join(f" --env-kwarg {k}={v}" for k, v in env_kwargs.items()),
+                          + "".join(f" --env-kwarg {k}={v}" for k, v in env_kwargs.items())
+                          + _config_flag(cfg["agent"]),
             "from_run": str(run)}
     return Path(out), meta
+
+
+def _config_flag(agent: dict[str, Any]) -> str:
+    """`` --config FILE`` naming the fields of ``agent`` that differ from the defaults (the
+    file itself is not kept; its content is the record's ``config``), or nothing."""
+    from lili.config import AgentConfig
+
+    default = AgentConfig().to_dict()
+    changed = {k: v for k, v in agent.items() if k in default and default[k] != v}
+    if not changed:
+        return ""
+    return " --config FILE  # FILE: " + ", ".join(f"{k}: {v}" for k, v in changed.items())
 
 
 def _finish(out: Path, meta: dict[str, Any]) -> int:
