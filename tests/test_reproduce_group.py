@@ -110,3 +110,36 @@ def test_a_grouped_sweep_trains_each_run_as_alone(tmp_path: Path) -> None:
     # Loose: the vmapped program rounds differently and the updates amplify it (tests/
     # test_many.py pins each step tightly); a seed or config mix-up differs by far more.
     np.testing.assert_allclose(together, alone, rtol=2e-2, atol=1e-3, equal_nan=True)
+
+
+# ------------------------------------------------- presets that reproduce by default (issue 34)
+
+
+def test_presets_write_their_departures_and_the_paper_setting_is_one_flag_away(tmp_path):
+    hockey = plan(get_preset("air-hockey"), tmp_path, seeds=1)
+    assert {s.interactions for s in hockey} == {2000}
+    assert all(s.agent["random_interactions"] == 0.1 for s in hockey)
+    literal = plan(get_preset("air-hockey"), tmp_path, seeds=1, paper_settings=True)
+    assert {s.interactions for s in literal} == {1000}
+    assert all(s.agent["random_interactions"] == 0.0 for s in literal)
+    lander = plan(get_preset("lunar-lander"), tmp_path, seeds=1)
+    assert {s.agent["boundary_discount"] for s in lander} == {"horizon"}
+    assert {s.agent["boundary_discount"] for s in plan(
+        get_preset("lunar-lander"), tmp_path, seeds=1, paper_settings=True)} == {"step"}
+    # The paper preset is made of the parts, each with its own departures.
+    paper = {s.run_dir: s for s in plan(get_preset("paper"), tmp_path, seeds=1)}
+    assert all(s.interactions == 2000 for s in hockey if s.run_dir in paper)
+    text = get_preset("air-hockey").departs()
+    assert "`random_interactions=0.1`, 2000 interactions (the paper: 1000)" in text
+    assert "`--paper-settings` runs the paper's setting" in text
+    assert get_preset("point-mass").departs() == ""
+
+
+def test_the_report_header_names_the_departures(tmp_path):
+    from lili.experiments.results import _header
+
+    specs = plan(get_preset("air-hockey"), tmp_path, seeds=1)
+    assert "**Departs from the paper's setting:** `random_interactions=0.1`" in \
+        _header(get_preset("air-hockey"), specs)
+    assert "At the paper's own setting (`--paper-settings`)" in \
+        _header(get_preset("air-hockey"), specs, paper_settings=True)

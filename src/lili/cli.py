@@ -390,7 +390,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
               overrides=parse_overrides(args.set),
               env_kwargs=_parse_kwargs(args.env_kwarg),
               check_only=args.check_only, sources=args.sources, group=args.group,
-              device=args.device)
+              device=args.device, paper_settings=args.paper_settings)
     return 0
 
 
@@ -500,6 +500,10 @@ def build_parser() -> argparse.ArgumentParser:
     x.add_argument("--device", metavar="{cpu,gpu}",
                    help="JAX platform of the runs' processes (default: JAX's choice); with "
                         "gpu, several processes share the GPU (no memory preallocation)")
+    x.add_argument("--paper-settings", action="store_true",
+                   help="the paper's literal setting where a preset departs from it (air "
+                        "hockey: 1000 interactions, no random interactions; Lunar Lander: the "
+                        "per-step discount at the boundary)")
     x.add_argument("--dry-run", action="store_true", help="list the runs and the CPU-hours")
     x.add_argument("--report-only", action="store_true",
                    help="start nothing; write an interim report from the finished runs")

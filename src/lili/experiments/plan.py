@@ -89,8 +89,11 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
          interactions: int | None = None, algos: tuple[str, ...] | None = None,
          quick: bool = False, overrides: dict[str, Any] | None = None,
          envs: tuple[str, ...] | None = None,
-         env_kwargs: dict[str, Any] | None = None) -> list[RunSpec]:
+         env_kwargs: dict[str, Any] | None = None,
+         paper_settings: bool = False) -> list[RunSpec]:
     """Every run of ``preset`` under ``out``, each once (presets share runs; see presets).
+    ``paper_settings``: each part without its departures from the paper's setting
+    (:meth:`Preset.paper_setting`).
 
     ``quick``: :data:`QUICK_INTERACTIONS` interactions, 1 seed and :data:`QUICK_CONFIG`, unless
     ``seeds`` / ``interactions`` are given. ``algos`` keeps only those algos, ``envs`` only
@@ -112,6 +115,8 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
             raise ValueError(f"--algos {' '.join(unknown)} is not in preset {preset.name!r}; "
                              f"allowed: {', '.join(preset.algos)}")
     parts = [PRESETS[n] for n in preset.includes] or [preset]
+    if paper_settings:
+        parts = [part.paper_setting() for part in parts]
     env_ids = None if envs is None else tuple(resolve_env_id(e) for e in envs)
     if env_ids is not None:
         offered = tuple(dict.fromkeys(e for part in parts for e in part.envs))

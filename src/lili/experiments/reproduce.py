@@ -132,6 +132,7 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
               report_only: bool = False, env_kwargs: dict[str, Any] | None = None,
               check_only: bool = False, sources: str | Path | None = None,
               group: int | None = None, device: str | None = None,
+              paper_settings: bool = False,
               say: Callable[[str], None] = print) -> dict[str, Any]:
     """Run preset ``name`` into ``out`` and write ``out/<name>/report/``; see the module doc.
 
@@ -145,7 +146,9 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     (``benchmarks/results/claims_sources.yaml``). ``group``: runs of one cell (same env, algo,
     budget and config; their seeds differ) trained together in one process, at most this many
     (:func:`default_group` when None); ``device``: ``"cpu"`` or ``"gpu"`` for the runs'
-    processes (None: JAX's default). Every other report ends with the same claims
+    processes (None: JAX's default). ``paper_settings``: the paper's literal setting where the
+    preset departs from it (:meth:`~lili.experiments.presets.Preset.departs`, printed in the
+    report's header otherwise). Every other report ends with the same claims
     table, also written to ``out/<name>/report/claims.md``. Every value is checked and every
     existing run folder compared with the run it would become before anything is written; a bad one
     raises ValueError naming it. Runs that fail are listed (with their logs) in a ValueError
@@ -176,7 +179,8 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
 
         check_address(ray)
     specs = plan(preset, out, seeds=seeds, interactions=interactions, algos=algos, quick=quick,
-                 overrides=overrides, envs=envs, env_kwargs=env_kwargs)
+                 overrides=overrides, envs=envs, env_kwargs=env_kwargs,
+                 paper_settings=paper_settings)
     status = {s: run_status(s) for s in specs}
     if dry_run and report_only:
         raise ValueError("--dry-run and --report-only are invalid together; allowed: one of them")
@@ -184,7 +188,7 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
         return _dry_run(name, specs, status, jobs or LOCAL_JOBS, say, group)
     changes = _changes(overrides, env_kwargs)
     if report_only:
-        return _report_only(name, preset, specs, status, out, say, changes)
+        return _report_only(name, preset, specs, status, out, say, changes, paper_settings)
     if ray is not None:
         _check_ray_importable()
     todo = [s for s in specs if status[s] != "done"]
@@ -204,7 +208,8 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
             raise ValueError(f"{count} of {len(todo)} runs failed:\n{lines}")
     else:
         say(f"{name}: all {len(specs)} runs are done")
-    report = _write_report(preset, specs, out, say, changes=changes)
+    report = _write_report(preset, specs, out, say, changes=changes,
+                           paper_settings=paper_settings)
     claims = _claims_table(preset, out, say)
     say(f"report: {report['dir']} ({time.time() - t0:.0f} s)")
     return {"runs": len(specs), "ran": len(todo), "report": report, "claims": claims}
@@ -251,24 +256,28 @@ def _changes(overrides: dict[str, Any] | None, env_kwargs: dict[str, Any] | None
 
 
 def _write_report(preset, specs: list[RunSpec], out: Path, say: Callable[[str], None],
-                  planned: list[RunSpec] | None = None, changes: str = "") -> dict[str, Any]:
+                  planned: list[RunSpec] | None = None, changes: str = "",
+                  paper_settings: bool = False) -> dict[str, Any]:
     """Write the preset's report from ``specs`` and print its markdown."""
     from lili.experiments.results import write_preset_report
 
-    report = write_preset_report(preset, specs, out, planned=planned, changes=changes)
+    report = write_preset_report(preset, specs, out, planned=planned, changes=changes,
+                                 paper_settings=paper_settings)
     say(report["markdown"])
     return report
 
 
 def _report_only(name: str, preset, specs: list[RunSpec], status: dict[RunSpec, str],
-                 out: Path, say: Callable[[str], None], changes: str) -> dict[str, Any]:
+                 out: Path, say: Callable[[str], None], changes: str,
+                 paper_settings: bool = False) -> dict[str, Any]:
     done = [s for s in specs if status[s] == "done"]
     if not done:
         raise ValueError(f"--report-only: no run of preset {name!r} is finished under {out}; "
                          f"allowed: an --out that holds finished runs of it")
     say(f"{name}: interim report from {len(done)} of {len(specs)} runs (the rest are not "
         f"finished; nothing is started)")
-    report = _write_report(preset, done, out, say, planned=specs, changes=changes)
+    report = _write_report(preset, done, out, say, planned=specs, changes=changes,
+                           paper_settings=paper_settings)
     claims = _claims_table(preset, out, say)
     say(f"report: {report['dir']}")
     return {"runs": len(specs), "ran": 0, "report": report, "claims": claims}

@@ -17,7 +17,7 @@ __all__ = ["write_preset_report"]
 
 
 def _header(preset: Preset, specs: list[RunSpec], of: int | None = None,
-            changes: str = "") -> str:
+            changes: str = "", paper_settings: bool = False) -> str:
     budget = max(s.interactions for s in specs)
     seeds = len({s.seed for s in specs})
     interim = ("" if of is None or of == len(specs) else
@@ -25,6 +25,11 @@ def _header(preset: Preset, specs: list[RunSpec], of: int | None = None,
                "the seeds column counts each row's. ")
     if changes:  # an ablation must not read as the preset itself beside the paper
         interim += f"**Every run changed from the preset's:** {changes}. "
+    departs = preset.departs()
+    if departs and paper_settings:
+        interim += "At the paper's own setting (`--paper-settings`). "
+    elif departs:  # a reader compares it with the paper: say where it is not the paper's run
+        interim += f"**Departs from the paper's setting:** {departs}. "
     return (f"## {preset.title} (`lili reproduce {preset.name}`)\n\n{interim}"
             f"Paper: {preset.where}. "
             f"Ours: {seeds} seed{'s' * (seeds > 1)}, {budget} interactions per run; "
@@ -62,12 +67,13 @@ def _table_report(preset: Preset, specs: list[RunSpec], out: Path) -> dict[str, 
 
 def write_preset_report(preset: Preset, specs: list[RunSpec], out: Path,
                         planned: list[RunSpec] | None = None,
-                        changes: str = "") -> dict[str, Any]:
+                        changes: str = "", paper_settings: bool = False) -> dict[str, Any]:
     """Write ``out/<preset>/report/`` (and each part's report for ``paper``); return it.
 
     ``planned``: every run of the preset, when ``specs`` are only the finished ones (an
     interim report says so in its header). ``changes``: the ``--set`` / ``--env-kwarg``
-    flags every run was given, named in the header.
+    flags every run was given, named in the header. ``paper_settings``: the runs are at the
+    paper's setting, not the preset's departures from it (the header says which).
     """
     report_dir = check_out_dir(out / preset.name / "report")
     parts = [PRESETS[n] for n in preset.includes] or [preset]
@@ -88,7 +94,7 @@ def write_preset_report(preset: Preset, specs: list[RunSpec], out: Path,
                                   upto=min(s.interactions for s in mine))
             payload[part.name] = {"summary": result["summary"], "files": result["files"]}
         of = None if planned is None else sum(s.preset == part.name for s in planned)
-        text = _header(part, mine, of, changes) + result["markdown"]
+        text = _header(part, mine, of, changes, paper_settings) + result["markdown"]
         (part_dir / "results.md").write_text(text, encoding="utf-8")
         rel = Path("..") / ".." / part.name / "report" if part is not preset else Path(".")
         figures = [f"![{name}]({rel / name})" for name in result["files"]
