@@ -4,7 +4,7 @@ PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: venv dev run test lint bench clean
+.PHONY: venv dev run test test-slow lint bench clean
 
 $(BIN)/lili: pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -25,9 +25,17 @@ dev: $(VENV)/.dev
 run: venv
 	$(BIN)/lili reproduce quickstart --out runs
 
+# Two pytest workers (pytest-xdist), one test file each at a time: a file's module fixtures are
+# made once, and the two cores of the CI machine both work.
+PYTEST_PAR := -n 2 --dist loadfile
+
 test: dev
 	$(BIN)/ruff check src tests benchmarks
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q $(PYTEST_PAR)
+
+# The tests marked slow (long learning runs, every agent on every env, the costlier variants).
+test-slow: dev
+	$(BIN)/python -m pytest -q -m slow $(PYTEST_PAR)
 
 bench: dev
 	$(BIN)/pip install -q -e '.[bench]'

@@ -19,20 +19,24 @@ def _numbers(run_dir: Path) -> list[list[str]]:
     return [r[:drop] + r[drop + 1:] for r in rows]
 
 
-def _sweep(out: Path, *backend: str) -> str:
+def _sweep(out: Path, algos: tuple[str, ...], *backend: str) -> str:
     cmd = [sys.executable, "-m", "lili.cli", "reproduce", "driving-2d", "--quick", "--algos",
-           "sac", "lili", "--interactions", "4", "--out", str(out), "--no-progress", *backend]
+           *algos, "--interactions", "4", "--out", str(out), "--no-progress", *backend]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
     assert res.returncode == 0, res.stdout + res.stderr
     return res.stdout
 
 
-def test_ray_sweep_equals_local(tmp_path: Path) -> None:
-    log = _sweep(tmp_path / "ray", "--ray", "--jobs", "2")
+# The default suite sweeps one algo; the two-algo sweep (two runs at once on each backend) is
+# slow. Both compare every number of every run.
+@pytest.mark.parametrize("algos", [("sac",), pytest.param(("sac", "lili"), marks=pytest.mark.slow)],
+                         ids=["sac", "sac-lili"])
+def test_ray_sweep_equals_local(tmp_path: Path, algos: tuple[str, ...]) -> None:
+    log = _sweep(tmp_path / "ray", algos, "--ray", "--jobs", "2")
     assert "to run on Ray (local, 2 CPUs)" in log
-    _sweep(tmp_path / "local", "--jobs", "2")
+    _sweep(tmp_path / "local", algos, "--jobs", "2")
     runs = sorted((tmp_path / "local").rglob("seed_*"))
-    assert len(runs) == 2
+    assert len(runs) == len(algos)
     for local in runs:
         ray = tmp_path / "ray" / local.relative_to(tmp_path / "local")
         assert (ray / "summary.json").is_file()

@@ -23,7 +23,12 @@ def _lili(*args: str) -> subprocess.CompletedProcess:
                           timeout=600)
 
 
-@pytest.mark.parametrize("alias", sorted(ENV_ALIASES))
+# One 2D env and the MuJoCo one by default (each a fresh `lili eval` process); every env: slow.
+DEFAULT = ("point-mass", "air-hockey")
+
+
+@pytest.mark.parametrize("alias", [a if a in DEFAULT else pytest.param(a, marks=pytest.mark.slow)
+                                   for a in sorted(ENV_ALIASES)])
 def test_eval_video_for_every_env(alias: str, tmp_path: Path) -> None:
     out = tmp_path / "runs"
     assert cli.main(["train", alias, "--algo", "random", "--interactions", "2", "--out",
