@@ -1,3 +1,4 @@
+# Over 400 lines: the one jitted program (play, store, update) and the run loop that logs it.
 """Many runs as one jitted program per interaction, on the JAX-native envs (``--backend jax``).
 
 :class:`JaxRuns` trains K runs of one core (SAC, LILI or LILI without influence) on the JAX

@@ -1,3 +1,4 @@
+# Over 400 lines: the stacked buffers and the group loop are one unit (act, store, update K runs).
 """Many runs in one program: K runs that share one core train side by side.
 
 :func:`train_many` is :func:`lili.train.train` for K agents at once. The agents must share one

@@ -1,3 +1,4 @@
+# Over 400 lines: the claims of every preset beside the one evaluator that reads them.
 """The paper's claims as checks: each preset states what its figure or table claims, and
 :func:`check_claims` says PASS, FAIL or "too few seeds" for each from run folders.
 
