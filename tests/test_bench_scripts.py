@@ -226,6 +226,7 @@ def test_drift_lagged_embedding_noise_is_checked(value: str, monkeypatch, capsys
     assert f"--embedding-noise {float(value)} is invalid" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_drift_frozen_latent_is_the_latent_lili_acts_on(tmp_path: Path) -> None:
     """The ``latent`` variant appends, at every step of an interaction, the latent a trained
     LILI holds for it when it plays the same actions (:class:`lili.evaluate.Episodes`)."""
@@ -256,7 +257,9 @@ def test_drift_frozen_latent_is_the_latent_lili_acts_on(tmp_path: Path) -> None:
             obs, *_ = env.step(a)
         obs, _ = env.reset()
     bad = tmp_path / "sac"
+    sac_cfg = tmp_path / "sac.yaml"
+    sac_cfg.write_text("warmup_interactions: 3\nhidden: [16]\n")
     assert cli.main(["train", "influence-drift", "--algo", "sac", "--interactions", "4",
-                     "--out", str(bad), "--config", str(cfg), "--no-progress"]) == 0
+                     "--out", str(bad), "--config", str(sac_cfg), "--no-progress"]) == 0
     with pytest.raises(ValueError, match="allowed: a lili or lili-no-influence run"):
         module.frozen_latent(str(bad / "InfluenceDrift-v0" / "sac" / "seed_0"))

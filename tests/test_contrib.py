@@ -25,6 +25,7 @@ def _point_mass_lili(algo, **changes):
     return agent, agent.core, agent.state, _batch(agent, np.random.default_rng(1))
 
 
+@pytest.mark.slow
 def test_categorical_latent_is_one_hot_and_the_encoder_learns_through_it():
     agent, core, state, batch = _point_mass_lili("lili-categorical")
     z, zbar, zbar_next = core._latents(state.model, state.target, state.norm, batch)
@@ -83,6 +84,7 @@ def test_quantised_latent_is_a_codebook_vector_and_both_sides_learn():
                                np.asarray(z)[0], rtol=1e-6, atol=1e-6)
 
 
+@pytest.mark.slow
 def test_bottleneck_feeds_the_decoder_a_noisy_latent_and_prices_its_size():
     env = gym.make("lili/PointMass-v0")
     beta = 0.3
@@ -193,7 +195,9 @@ def test_prediction_critic_reads_the_decoders_predictions_and_not_z():
     assert np.isfinite(float(metrics["critic_loss"]))
 
 
-@pytest.mark.parametrize("algo", CONTRIB_ALGOS)
+# One variant in the default suite; the others run the same code path (slow).
+@pytest.mark.parametrize("algo", [a if a == CONTRIB_ALGOS[0] else
+                                  pytest.param(a, marks=pytest.mark.slow) for a in CONTRIB_ALGOS])
 def test_every_variant_trains_saves_and_resumes_like_the_core(algo, tmp_path):
     assert algo in ALGOS
     agent, rows, _ = _run(algo, tmp_path, n=4)

@@ -24,6 +24,7 @@ from _env_modules import importable
 from test_bad_input import _snapshot, trained_run  # noqa: F401 - trained_run is a fixture
 
 from lili import cli
+from lili.agents.registry import config_for
 from lili.errors import MAX_LINE_CHARS, bounded, shown
 from lili.yaml_bounds import YAMLTooLarge, check_yaml, safe_load
 
@@ -223,7 +224,7 @@ def test_an_env_failing_in_training_is_one_line_naming_env_interaction_and_step(
         cls: str, algo: str, fragments: list[str], tmp_path: Path, envs,
         capsys: pytest.CaptureFixture[str]) -> None:
     spec = f"lili_hostile_envs:{cls}"
-    (tmp_path / "c.yaml").write_text(SMALL_SAC)
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(config_for(algo, yaml.safe_load(SMALL_SAC))))
     code = cli.main(["train", spec, "--algo", algo, "--interactions", "4", "--no-progress",
                      "--out", str(tmp_path), "--config", str(tmp_path / "c.yaml")])
     err = capsys.readouterr().err

@@ -50,6 +50,7 @@ def small_sac_config(tmp_path_factory) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_a_plain_gymnasium_env_checks_trains_and_evaluates_from_the_shell(tmp_path,
                                                                           small_config):
     out = _lili("check-env", SPEC, cwd=tmp_path)
@@ -87,6 +88,7 @@ def test_the_horizon_comes_from_a_time_limit():
         env_horizon(gym.make("Pendulum-v1").unwrapped)
 
 
+@pytest.mark.slow
 def test_an_env_without_a_strategy_trains_sac_and_lili_and_the_oracle_refuses_it():
     cfg = AgentConfig.from_dict({**SMALL, "updates_per_step": 0.05})
     for cls in (SAC, LILI):

@@ -470,6 +470,7 @@ def test_cli_refuses_a_recording_folder_it_cannot_write(capsys, tmp_path, agent_
     assert (tmp_path / "play-sessions").read_text() == "in the way\n"
 
 
+@pytest.mark.slow
 def test_ship_script_at_a_tiny_budget_and_from_a_run(tmp_path, capsys):
     """The script that makes the shipped agent, rerun just past the warm-up; `lili train` runs
     the same loop, so the run's final agent file is byte for byte the script's, and

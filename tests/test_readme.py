@@ -5,6 +5,8 @@ import io
 import re
 from pathlib import Path
 
+import pytest
+
 README = Path(__file__).resolve().parent.parent / "README.md"
 
 
@@ -20,6 +22,7 @@ def test_example_is_short():
     assert len(_example().strip().splitlines()) < 40
 
 
+@pytest.mark.slow
 def test_readme_example_trains_and_learns():
     out = io.StringIO()
     with contextlib.redirect_stdout(out):

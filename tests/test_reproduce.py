@@ -344,6 +344,7 @@ def test_finished_runs_are_skipped(quick_sweep: Path) -> None:
     assert {p: p.stat().st_mtime_ns for p in quick_sweep.rglob("metrics.csv")} == before
 
 
+@pytest.mark.slow
 def test_killed_run_resumes_to_the_same_numbers(quick_sweep: Path, tmp_path: Path) -> None:
     out = tmp_path / "killed"
     proc = _reproduce(out, "--algos", "lili")

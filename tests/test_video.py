@@ -24,7 +24,7 @@ def _lili(*args: str) -> subprocess.CompletedProcess:
 
 
 # One 2D env and the MuJoCo one by default (each a fresh `lili eval` process); every env: slow.
-DEFAULT = ("point-mass", "air-hockey")
+DEFAULT = ("point-mass",)
 
 
 @pytest.mark.parametrize("alias", [a if a in DEFAULT else pytest.param(a, marks=pytest.mark.slow)

@@ -201,6 +201,13 @@ def cmd_train(args: argparse.Namespace) -> int:
     _check_interactions(args.interactions)
     seeds = _parse_seeds(args.seeds) if args.seeds is not None else [_check_seed(args.seed)]
     check_out_dir(args.out, "--out")
+    if args.backend == "jax":  # an algo or env the JAX path lacks, before its config is read
+        from lili.jax_train import check_jax_run
+
+        try:
+            check_jax_run(args.algo, env_id)
+        except ValueError as e:
+            raise UsageError(str(e)) from None
     if args.config:
         _check_config_size(args.config)
     config = load_config(args.config) if args.config else AgentConfig()
@@ -288,13 +295,9 @@ def _train_jax(args: argparse.Namespace, env_id: str, seeds: list[int], config: 
                env_kwargs: dict[str, Any]) -> int:
     """``lili train --backend jax``: the seeds as one :class:`lili.jax_train.JaxRuns`, each
     with its own run folder. Everything is checked before a folder is written."""
-    from lili.jax_train import JaxRuns, check_jax_run
+    from lili.jax_train import JaxRuns
     from lili.runs import RunLogger
 
-    try:
-        check_jax_run(args.algo, env_id)
-    except ValueError as e:
-        raise UsageError(str(e)) from None
     folders = [_check_run_folder(args, env_id, env_kwargs, config, seed) for seed in seeds]
     try:
         runs = JaxRuns(args.algo, env_id, seeds, config, env_kwargs)
