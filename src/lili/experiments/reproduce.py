@@ -41,13 +41,14 @@ def default_group(device: str | None) -> int:
     return GPU_GROUP if device == "gpu" else 1
 
 
-def check_device(device: str | None) -> None:
-    """ValueError unless ``device`` is None or one of :data:`DEVICES` that JAX sees here."""
+def check_device(device: str | None, here: bool = True) -> None:
+    """ValueError unless ``device`` is None or one of :data:`DEVICES`; with ``here`` (the runs
+    start on this machine, not a Ray cluster's nodes) also one that JAX sees here."""
     if device is None:
         return
     if device not in DEVICES:
         raise ValueError(f"--device {shown(device)} is invalid; allowed: {', '.join(DEVICES)}")
-    if device == "gpu":
+    if device == "gpu" and here:
         import jax
 
         try:
@@ -167,10 +168,7 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
         check_count(jobs, "--jobs", MAX_JOBS)
     if group is not None:
         check_count(group, "--group", MAX_GROUP)
-    if ray is None:
-        check_device(device)
-    elif device is not None and device not in DEVICES:
-        raise ValueError(f"--device {shown(device)} is invalid; allowed: {', '.join(DEVICES)}")
+    check_device(device, here=ray is None)
     group = group if group is not None else default_group(device)
     out = Path(out)
     check_out_dir(out)
