@@ -36,12 +36,18 @@ def test_noise_and_history_expand_to_the_paper_tables(tmp_path: Path) -> None:
     noise = plan(get_preset("noise"), tmp_path)
     lili = {s.env_kwargs.get("step_noise", 0.0) for s in noise if s.algo == "lili"}
     assert lili == set(PAPER_TABLES["noise"]["rows"])
-    assert len(noise) == 3 * (6 + 2) and {s.seed for s in noise} == {0, 1, 2}
+    # 6 LILI rows, the bounds (SAC, Oracle) and SAC and the Oracle at two sigmas.
+    assert len(noise) == 3 * (6 + 2 + 2 * 2) and {s.seed for s in noise} == {0, 1, 2}
     assert {s.interactions for s in noise} == {2000}
+    bounded = {(s.algo, s.env_kwargs.get("step_noise")) for s in noise if s.algo != "lili"}
+    assert bounded == {(a, v) for a in ("sac", "oracle") for v in (None, 0.4, 1.0)}
     history = plan(get_preset("history"), tmp_path)
     for s in history:
         n = s.env_kwargs.get("history", 1)
-        assert s.config.get("history", 1) == n  # the encoder reads the partner's N
+        # LILI's encoder reads the partner's N; SAC and the Oracle read no history.
+        assert s.config.get("history", 1) == (n if s.algo == "lili" else 1)
+    assert {(s.algo, s.env_kwargs.get("history")) for s in history if s.algo != "lili"} == {
+        (a, v) for a in ("sac", "oracle") for v in (None, 5, 11)}
     assert {s.env_kwargs.get("history", 1) for s in history} == set(PAPER_TABLES["history"]["rows"])
     # sigma = 0, N = 1 and the bounds are the Point Mass preset's own runs.
     pm = {s.run_dir for s in plan(get_preset("point-mass"), tmp_path)}
@@ -135,7 +141,9 @@ def test_each_algo_checks_its_own_constraints_before_anything_runs(tmp_path: Pat
 
 def test_paper_counts_each_run_once(tmp_path: Path) -> None:
     specs = plan(get_preset("paper"), tmp_path)
-    assert len({s.run_dir for s in specs}) == len(specs) == 3 * (6 + 5 + 5 + 6 + 6 + 6 + 5)
+    # Point Mass 6, noise and history 5 LILI rows + SAC and the Oracle at 2 variants each,
+    # the three driving/landing tasks 6, air hockey 5.
+    assert len({s.run_dir for s in specs}) == len(specs) == 3 * (6 + 9 + 9 + 6 + 6 + 6 + 5)
 
 
 def test_quick_algos_and_seeds(tmp_path: Path) -> None:
@@ -287,8 +295,8 @@ def test_ray_without_the_extra(tmp_path: Path) -> None:
 def test_dry_run_lists_runs_and_cpu_hours(tmp_path: Path, capsys) -> None:
     assert main(["reproduce", "paper", "--dry-run", "--out", str(tmp_path / "out")]) == 0
     out = capsys.readouterr().out
-    assert out.count("\nnew ") + out.startswith("new ") == 117
-    assert "paper: 117 runs (117 to run, 0 done); estimated " in out
+    assert out.count("\nnew ") + out.startswith("new ") == 141
+    assert "paper: 141 runs (141 to run, 0 done); estimated " in out
     hours = float(out.split("estimated ")[1].split(" CPU-hours")[0])
     assert 10 < hours < 200
     assert "  noise: " in out and "  air-hockey: " in out

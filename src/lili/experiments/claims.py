@@ -37,7 +37,15 @@ from typing import Any, NamedTuple
 import numpy as np
 import yaml
 
-from lili.experiments.presets import HISTORY, NOISE, PRESETS, Group, Preset
+from lili.experiments.presets import (
+    HISTORY,
+    HISTORY_BOUNDED,
+    NOISE,
+    NOISE_BOUNDED,
+    PRESETS,
+    Group,
+    Preset,
+)
 from lili.report.files import CONFIG_FILE, METRICS_FILE, SUMMARY_FILE, Run, find_runs
 from lili.report.paper import PAPER, PAPER_TABLES
 from lili.report.stats import (
@@ -204,7 +212,19 @@ def _noise() -> tuple[Claim, ...]:
                         "greater", Side("lili", "point-mass"),
                         Side("lili", f"noise/sigma_{NOISE[-1]:g}"),
                         paper=_table_pair("noise", 0.0, NOISE[-1])))
+    claims += _similar_across("noise", NOISE_BOUNDED, lambda s: f"σ = {s:g}",
+                              lambda s: f"noise/sigma_{s:g}", "σ = 0")
     return tuple(claims)
+
+
+def _similar_across(table: str, values: tuple[Any, ...], label: Callable[[Any], str],
+                    folder: Callable[[Any], str], plain: str) -> list[Claim]:
+    """"SAC and the Oracle perform similarly across" the table's variants (the paper's words,
+    Appendix E): each at every variant in ``values`` level with itself on the plain task."""
+    where = f"similar across variants, aggregated (Table {2 if table == 'noise' else 3})"
+    return [Claim(f"{algo_label(algo)} similar across: {label(v)} ≈ {plain}", "return", "level",
+                  Side(algo, folder(v)), Side(algo, "point-mass"), paper=where)
+            for algo in ("sac", "oracle") for v in values]
 
 
 def _history() -> tuple[Claim, ...]:
@@ -219,6 +239,8 @@ def _history() -> tuple[Claim, ...]:
         Claim(f"LILI (N = {last}) ≈ SAC", "return", "level", Side("lili", f"history/n_{last}"),
               Side("sac", "point-mass"), paper=_table_pair("history", last, "sac")),
     ]
+    claims += _similar_across("history", HISTORY_BOUNDED, lambda n: f"N = {n}",
+                              lambda n: f"history/n_{n}", "N = 1")
     return tuple(claims)
 
 

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from lili.agents.registry import config_for
 from lili.config import AgentConfig, stored_agent_config
 from lili.experiments.claims import (
     RULE_NOTE,
@@ -51,7 +52,7 @@ def departures(run: Run, group: Group, part: Preset) -> list[str]:
         out.append(f"interactions={run.budget}")
     stored = stored_agent_config(run.config.get("agent"))
     if isinstance(stored, dict):
-        want = AgentConfig.from_dict(group.config).to_dict()
+        want = AgentConfig.from_dict(config_for(run.algo, group.config)).to_dict()
         out += [f"{k}={stored[k]}" for k in want if k in stored and stored[k] != want[k]
                 and k != "checkpoint_every"]  # when checkpoints are written changes no number
     kwargs = run.config.get("env_kwargs") or {}

@@ -81,7 +81,8 @@ def _expand_one(preset: Preset, out: Path, seeds: int, interactions: int | None,
                                      experiment=out / group.folder,
                                      env=group.env, algo=algo, seed=seed, interactions=budget,
                                      env_kwargs={**group.env_kwargs, **extra_env},
-                                     config={**group.config, **config_for(algo, extra_config)}))
+                                     config={**config_for(algo, group.config),
+                                             **config_for(algo, extra_config)}))
     return specs
 
 

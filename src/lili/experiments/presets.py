@@ -22,6 +22,10 @@ ALL_ALGOS = PAPER_ALGOS  # the paper's algos, in the registry's order
 PM = "lili/PointMass-v0"
 NOISE = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0)
 HISTORY = (1, 3, 5, 7, 9, 11)
+NOISE_BOUNDED = (0.4, 1.0)
+"""Noise levels where the noise preset also runs SAC and the Oracle (issue 34)."""
+HISTORY_BOUNDED = (5, 11)
+"""History lengths where the history preset also runs SAC and the Oracle."""
 
 
 @dataclass(frozen=True)
@@ -110,11 +114,18 @@ def _env_preset(name: str, env: str, where: str, interactions: int, algos: tuple
                   paper_interactions=paper_interactions, departure_reason=reason)
 
 
+def _variant_algos(value: Any, bounded: tuple[Any, ...]) -> tuple[str, ...]:
+    """A variant row's algos: LILI, and SAC and the Oracle at the variants ``bounded`` (the
+    paper reports them aggregated over all variants, "similar across" them: these check it)."""
+    return ("lili", "sac", "oracle") if value in bounded else ("lili",)
+
+
 def _noise() -> Preset:
     groups = [Group(folder="point-mass", env=PM, algos=("lili",), label="sigma = 0 (Point Mass)",
                     value=0.0)]
     for sigma in NOISE[1:]:
-        groups.append(Group(folder=f"noise/sigma_{sigma:g}", env=PM, algos=("lili",),
+        groups.append(Group(folder=f"noise/sigma_{sigma:g}", env=PM,
+                            algos=_variant_algos(sigma, NOISE_BOUNDED),
                             env_kwargs={"step_noise": sigma}, label=f"sigma = {sigma:g}",
                             value=sigma))
     groups.append(Group(folder="point-mass", env=PM, algos=("sac", "oracle"), label="bounds"))
@@ -127,7 +138,8 @@ def _history() -> Preset:
     groups = [Group(folder="point-mass", env=PM, algos=("lili",), label="N = 1 (Point Mass)",
                     value=1)]
     for n in HISTORY[1:]:
-        groups.append(Group(folder=f"history/n_{n}", env=PM, algos=("lili",),
+        groups.append(Group(folder=f"history/n_{n}", env=PM,
+                            algos=_variant_algos(n, HISTORY_BOUNDED),
                             env_kwargs={"history": n}, config={"history": n},
                             label=f"N = {n}", value=n))
     groups.append(Group(folder="point-mass", env=PM, algos=("sac", "oracle"), label="bounds"))

@@ -1,6 +1,7 @@
 """The appendix tables whose rows are partner variants (noise level, history length).
 
-Each row is one variant's LILI runs; SAC and the Oracle are the bounds. Ours (mean +- s.e. over
+Each row is one variant's LILI runs (and SAC's or the Oracle's where they ran at that variant);
+SAC and the Oracle of the plain task are the bounds. Ours (mean +- s.e. over
 seeds of :func:`~lili.report.stats.final_performance`) sit beside
 :data:`~lili.report.paper.PAPER_TABLES`.
 """
@@ -26,7 +27,9 @@ Variant = tuple[str, Any, Sequence[Run]]
 
 def variant_rows(variants: Sequence[Variant], bounds: Sequence[Run], table: str,
                  frac: float = 0.1) -> list[dict[str, Any]]:
-    """One dict per variant (``label``, ``value``, runs) and per bound algo (SAC, Oracle).
+    """One dict per variant (``label``, ``value``, runs) and algo in its runs (the table's
+    own algo, LILI, first; SAC or the Oracle where they ran at that variant), and per bound
+    algo (SAC, Oracle) of ``bounds``.
 
     Keys: ``label``, ``value`` (None for a bound), ``algo``, ``n``, ``seeds``, ``returns``,
     ``return_mean``, ``return_se``, ``return_iqm`` and ``return_iqm_ci`` (the IQM over seeds
@@ -55,7 +58,14 @@ def variant_rows(variants: Sequence[Variant], bounds: Sequence[Run], table: str,
                 "paper_se": None if paper is None else paper[1]}
 
     for label, value, runs in variants:
-        rows.append(row(label, value, ref["algo"], runs, ref["rows"].get(value)))
+        # A variant's own algo first; SAC and the Oracle measured at that variant after it
+        # (the paper aggregates them over all variants: its bound is their paper number).
+        algos = dict.fromkeys([ref["algo"]] + [r.algo for r in runs])
+        for algo in algos:
+            mine = [r for r in runs if r.algo == algo]
+            if mine or algo == ref["algo"]:
+                paper = ref["rows"].get(value) if algo == ref["algo"] else ref["bounds"].get(algo)
+                rows.append(row(label, value, algo, mine, paper))
     for algo in ("sac", "oracle"):
         runs = [r for r in bounds if r.algo == algo]
         if runs:
@@ -91,7 +101,8 @@ def plot_variants(rows: Sequence[dict[str, Any]], table: str, out_png: str | Pat
     import matplotlib.pyplot as plt
 
     ref = PAPER_TABLES[table]
-    var = [r for r in rows if r["value"] is not None and r["return_mean"] is not None]
+    var = [r for r in rows if r["value"] is not None and r["return_mean"] is not None
+           and r["algo"] == ref["algo"]]
     fig, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
     xs = np.array([r["value"] for r in var], dtype=float)
     ax.errorbar(xs, [r["return_mean"] for r in var], [r["return_se"] for r in var],
@@ -105,6 +116,13 @@ def plot_variants(rows: Sequence[dict[str, Any]], table: str, out_png: str | Pat
     ax.errorbar([k for k, _ in paper], [v[0] for _, v in paper], [v[1] for _, v in paper],
                 color=algo_color("lili"), marker="s", ls="--", alpha=0.6, capsize=3,
                 label="LILI (paper)")
+    for algo in ("sac", "oracle"):
+        at = [r for r in rows if r["value"] is not None and r["algo"] == algo
+              and r["return_mean"] is not None]
+        if at:
+            ax.errorbar([r["value"] for r in at], [r["return_mean"] for r in at],
+                        [r["return_se"] or 0.0 for r in at], color=algo_color(algo), marker="D",
+                        ls="none", capsize=3, label=f"{algo_label(algo)} at that variant (ours)")
     for r in rows:
         if r["value"] is None and r["return_mean"] is not None:
             ax.axhline(r["return_mean"], color=algo_color(r["algo"]), lw=1.2,
