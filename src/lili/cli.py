@@ -398,10 +398,15 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
 
 def cmd_results(args: argparse.Namespace) -> int:
-    from lili.experiments.page import write_results_page
+    from lili.experiments.page import DEFAULT_OUT, DEFAULT_README, write_results_page
 
-    path = write_results_page(args.sources, args.out)
-    print(f"results page: {path}")
+    readme = args.readme
+    if readme is None and args.out == DEFAULT_OUT and Path(DEFAULT_README).is_file():
+        readme = DEFAULT_README  # the repo's page and its README go together
+    elif readme == "none":
+        readme = None
+    path = write_results_page(args.sources, args.out, readme)
+    print(f"results page: {path}" + (f"; quick-start table in {readme}" if readme else ""))
     return 0
 
 
@@ -519,7 +524,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "benchmarks/results/claims_sources.yaml (the committed records)")
     x.set_defaults(func=cmd_reproduce)
 
-    from lili.experiments.page import DEFAULT_OUT, DEFAULT_SOURCES
+    from lili.experiments.page import DEFAULT_OUT, DEFAULT_README, DEFAULT_SOURCES
 
     res = sub.add_parser("results", help="write the results page (docs/results.md) from the "
                          "committed records")
@@ -527,6 +532,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help=f"run folders per preset group (default {DEFAULT_SOURCES})")
     res.add_argument("--out", default=DEFAULT_OUT, help=f"the page (default {DEFAULT_OUT}; "
                      "figures in results/ beside it)")
+    res.add_argument("--readme", default=None,
+                     help=f"a README whose quick-start table block is rewritten from the "
+                     f"quickstart records too (default: {DEFAULT_README} when it exists and "
+                     f"--out is {DEFAULT_OUT}; none: only the page)")
     res.set_defaults(func=cmd_results)
 
     c = sub.add_parser("check-env", help="check an env against the repeated-interaction contract")

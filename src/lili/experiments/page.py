@@ -38,10 +38,14 @@ from lili.report.tables import fmt_interval, fmt_mean_se
 from lili.report.variants import plot_variants, variant_rows
 
 __all__ = ["write_results_page", "results_markdown", "DEFAULT_SOURCES", "DEFAULT_OUT",
-           "reproduce_commands", "departures"]
+           "DEFAULT_README", "reproduce_commands", "departures", "quickstart_table",
+           "with_quickstart_table"]
 
 DEFAULT_SOURCES = "benchmarks/results/claims_sources.yaml"
 DEFAULT_OUT = "docs/results.md"
+DEFAULT_README = "README.md"
+QUICKSTART_BEGIN = "<!-- quickstart-table: written by `lili results` from the committed records -->"
+QUICKSTART_END = "<!-- /quickstart-table -->"
 
 
 def departures(run: Run, group: Group, part: Preset) -> list[str]:
@@ -318,13 +322,60 @@ def results_markdown(sources: str | Path = DEFAULT_SOURCES,
     return head + "\n".join(sections)
 
 
+def quickstart_table(sources: str | Path = DEFAULT_SOURCES) -> str:
+    """The README's quick-start table: ``make run``'s algos (the ``quickstart`` preset) from
+    the records ``sources`` names, IQM over seeds with its 95% interval."""
+    part = PRESETS["quickstart"]
+    evidence = load_evidence(part, load_sources(sources))
+    group = part.groups[0]
+    runs = [r for algo in group.algos for r in evidence.get((group.folder, algo), [])]
+    if not runs:
+        return "No committed records.\n"
+    lines = ["| algo | final return IQM [95% CI] | success IQM [95% CI] | seeds | interactions "
+             "| paper |", "|---|---:|---:|---:|---:|---|"]
+    for row in summarize(runs):
+        mine = evidence[(group.folder, row["algo"])]
+        ci, sci = row["return_iqm_ci"] or (None, None), row["success_iqm_ci"] or (None, None)
+        lines.append(f"| {algo_label(row['algo'])} | {fmt_interval(row['return_iqm'], *ci)} | "
+                     f"{fmt_interval(row['success_iqm'], *sci, pct=True)} | {row['n']} | "
+                     f"{_interactions(mine)} | {_paper_cell(row)} |")
+    return "\n".join(lines) + "\n"
+
+
+def with_quickstart_table(readme: str, table: str) -> str:
+    """``readme`` with the text between its quick-start markers replaced by ``table``;
+    ValueError when the markers are not there once each, in order."""
+    begin, end = readme.find(QUICKSTART_BEGIN), readme.find(QUICKSTART_END)
+    if readme.count(QUICKSTART_BEGIN) != 1 or readme.count(QUICKSTART_END) != 1 or end < begin:
+        raise ValueError(f"the README has no {QUICKSTART_BEGIN!r} ... {QUICKSTART_END!r} "
+                         "block (each marker once, in that order)")
+    head = readme[:begin + len(QUICKSTART_BEGIN)]
+    return f"{head}\n{table}{readme[end:]}"
+
+
 def write_results_page(sources: str | Path = DEFAULT_SOURCES,
-                       out: str | Path = DEFAULT_OUT) -> Path:
-    """Write the page to ``out`` and its figures to ``results/`` beside it; return its path."""
+                       out: str | Path = DEFAULT_OUT,
+                       readme: str | Path | None = None) -> Path:
+    """Write the page to ``out`` and its figures to ``results/`` beside it; return its path.
+    ``readme``: a README whose quick-start block (:func:`with_quickstart_table`) is rewritten
+    too, checked before anything is written."""
     out = Path(out)
     if out.exists() and not out.is_file():
         raise ValueError(f"--out {out} is not a file; allowed: a markdown file path")
+    new_readme = None
+    if readme is not None:
+        readme = Path(readme)
+        try:
+            old = readme.read_text(encoding="utf-8")
+        except OSError as e:
+            raise ValueError(f"--readme {readme}: cannot read it ({e})") from None
+        try:
+            new_readme = with_quickstart_table(old, quickstart_table(sources))
+        except ValueError as e:
+            raise ValueError(f"--readme {readme}: {e}") from None
     text = results_markdown(sources, out.parent / "results", "results")
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text, encoding="utf-8")
+    if new_readme is not None:
+        readme.write_text(new_readme, encoding="utf-8")
     return out
