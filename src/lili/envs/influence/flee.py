@@ -37,8 +37,8 @@ costs 0, 0.25, 0.75, 1.5 for |k| = 1..4.
   0.375 + 0.417 + 0.542 + 0.75 = 2.083 (a supremum; an exhaustive search over trajectories on
   a 1/16 grid finds nothing better). The scripted one ends 0.0625 inside the boundary, x =
   -0.25, -0.0625, 0.1875, 0.4375: 0.375 + 0.4375 + 0.583 + 0.8125 = 53/24, **-2.208**. (A
-  stochastic policy of x alone can do a little better: a coin flip between staying at 0 and
-  ending at +0.4375 or -0.4375 earns -1.97.)
+  stochastic policy can do a little better: staying at 0 and flipping a coin each
+  interaction for a last step to +0.4375 or to -0.4375 earns -1.97.)
 - **influencer** (told g): stop one slot beyond the partner, so it steps toward home (from
   +-4 it cannot, and slips to -+1), then, at home, stay on it. Once home it costs nothing:
   **0** (every other slot costs more than 0 to stay at or return to), worth 0.625 per

@@ -9,6 +9,11 @@ The partner's state is its slot k in -4..4 (``strategy_id`` k + 4); ``strategy``
 k]``. Its only draw is the first slot, an index uniform in [0, 8) over the slots away from home
 (:class:`ResetDraws`: index i is slot i - 4 below home, i - 3 above); its updates draw nothing
 (``UpdateDraws`` is the empty tuple).
+
+x is float32 here and float64 in the reference, so an end within float32 rounding of a
+half-slot boundary (x = +-0.125, +-0.375, ...) may be read as the neighbouring slot; the
+boundaries themselves are exact in both, and the window where the two can differ is about
+1e-8 wide.
 """
 
 from __future__ import annotations
