@@ -9,7 +9,7 @@ influencer, and (with ``--ablate``) LILI variants, one changed option each.
 
 Scripted rows: the mean return per interaction over the last ``--last`` of ``--scripted``
 interactions (Point Mass and Drift: 3000 and 2000, because Point Mass's greedy target
-random-walks slowly and Drift's partner returns at random),
+random-walks slowly and Drift's partner returns at random; Flee: 300 and 240, whole cycles),
 seeds 0-1, beside the value derived in each env's docstring. Learned rows are the runs of the
 ``influence`` preset of ``lili reproduce`` (2000 interactions, 3 seeds by default; finished
 runs are skipped, killed ones resumed; ``--jobs`` at a time) under ``--out``; an ablation
@@ -47,8 +47,10 @@ from lili.runs import final_window
 
 ROOT = Path(__file__).resolve().parent.parent
 # Point Mass's greedy target takes a slow random walk round the circle, and Drift's partner
-# returns at random about every 20 interactions: average them out.
-SCRIPTED_BUDGET = {"lili/PointMass-v0": (3000, 2000), "lili/InfluenceDrift-v0": (3000, 2000)}
+# returns at random about every 20 interactions: average them out. Flee's scripted policies
+# cycle through 6 and 8 slots: count a whole number of both.
+SCRIPTED_BUDGET = {"lili/PointMass-v0": (3000, 2000), "lili/InfluenceDrift-v0": (3000, 2000),
+                   "lili/InfluenceFlee-v0": (300, 240)}
 
 
 def scripted_returns(env_id: str, interactions: int, last: int, seeds=(0, 1)) -> dict:

@@ -263,3 +263,23 @@ def test_drift_frozen_latent_is_the_latent_lili_acts_on(tmp_path: Path) -> None:
                      "--out", str(bad), "--config", str(sac_cfg), "--no-progress"]) == 0
     with pytest.raises(ValueError, match="allowed: a lili or lili-no-influence run"):
         module.frozen_latent(str(bad / "InfluenceDrift-v0" / "sac" / "seed_0"))
+
+
+def test_collapse_records_finds_the_recorded_collapses_and_reads_only(capsys, monkeypatch) -> None:
+    """On the committed Point Mass LILI records: the collapses the journal names (old seed 5
+    around 1000, new seed 3 around 1400), each beside its own code's steady runs."""
+    script = _script("collapse_records")
+    root = BENCH / "results/runs"
+    before = {p: p.stat().st_mtime for p in root.glob("s9/point-mass*/PointMass-v0/lili/*/*")}
+    monkeypatch.setattr("sys.argv", ["collapse_records.py"])
+    script.main()
+    out = capsys.readouterr().out
+    rows = {line.split(" | ")[1]: line for line in out.splitlines()
+            if line.startswith("| before") or line.startswith("| redesigned")}
+    assert " | 998 | " in rows["s9/point-mass-oldcore/PointMass-v0/lili/seed_5"]
+    assert " | 1384 | " in rows["s9/point-mass/PointMass-v0/lili/seed_3"]
+    assert "s9/point-mass/PointMass-v0/lili/seed_0" not in rows  # steady: a reference
+    assert before == {p: p.stat().st_mtime for p in before}
+    with pytest.raises(SystemExit, match="no metrics.csv"):
+        monkeypatch.setattr("sys.argv", ["collapse_records.py", str(root / "nowhere")])
+        script.main()

@@ -37,10 +37,12 @@ import pytest
 
 from lili.envs.driving2d import Driving2DEnv
 from lili.envs.influence.drift import InfluenceDriftEnv
+from lili.envs.influence.flee import InfluenceFleeEnv
 from lili.envs.influence.switch import InfluenceSwitchEnv
 from lili.envs.jax import (
     Driving2D,
     InfluenceDrift,
+    InfluenceFlee,
     InfluenceSwitch,
     PointMass,
     UniformPolicy,
@@ -51,6 +53,7 @@ from lili.envs.jax import (
 )
 from lili.envs.jax import drift as jdrift
 from lili.envs.jax import driving2d as jdriving
+from lili.envs.jax import flee as jflee
 from lili.envs.jax import point_mass as jpm
 from lili.envs.jax import switch as jswitch
 from lili.envs.jax.core import JaxRepeatedEnv
@@ -86,6 +89,14 @@ SWITCH = (InfluenceSwitchEnv, InfluenceSwitch(),
           lambda env: jswitch.ResetDraws(mode=jnp.asarray(env.partner.mode, jnp.int32)),
           lambda rng: ())
 
+
+def _flee_reset(env):
+    k = env.partner.k  # the draw's index: slots below home first, then those above
+    return jflee.ResetDraws(index=jnp.asarray(k + 4 if k < 0 else k + 3, jnp.int32))
+
+
+FLEE = (InfluenceFleeEnv, InfluenceFlee(), _flee_reset, lambda rng: ())
+
 DRIVING = (Driving2DEnv, Driving2D(),
            lambda env: jdriving.ResetDraws(right=jnp.asarray(env.partner.lane > 0)),
            lambda rng: ())
@@ -99,6 +110,8 @@ CASES = {
     "drift": (DRIFT, {}, 30),
     "drift-returns": (DRIFT, {"returns": 0.5, "horizon": 5}, 30),
     "switch": (SWITCH, {}, 40),
+    "flee": (FLEE, {}, 60),
+    "flee-horizon": (FLEE, {"horizon": 6}, 40),
     "driving-2d": (DRIVING, {}, 12),
     "driving-2d-history": (DRIVING, {"history": 3}, 20),
 }
@@ -162,9 +175,13 @@ def _play_both(case: str, seed: int = 3):
 def test_jax_env_follows_the_gymnasium_env(case: str) -> None:
     outcomes, successes, strategies = _play_both(case)
     # The case exercised the partner: both kinds of ending, and the strategy moved.
-    assert len(set(outcomes)) >= (3 if case == "switch" else 2), outcomes
+    assert len(set(outcomes)) >= (3 if case.startswith(("switch", "flee")) else 2), outcomes
     if case.startswith("driving"):
         assert len(set(successes)) == 2, successes
+    if case == "flee":  # home, both sides, and a slip past from a wall
+        g = strategies[:, 0]
+        assert (g == 0).any() and (g > 0).any() and (g < 0).any()
+        assert (np.abs(np.diff(g)) > 1).any()
     assert len({tuple(s) for s in strategies}) >= 2
     kwargs = CASES[case][1]
     if kwargs.get("step_noise"):  # noisy steps leave the 0.2 grid
@@ -193,7 +210,7 @@ def test_step_is_step_with_its_own_draws() -> None:
 @jax.jit
 def _draws(keys):
     """Many draws of each partner (one program: the test stays fast)."""
-    pm, drift, switch = PointMass(), InfluenceDrift(), InfluenceSwitch()
+    pm, drift, switch, flee = PointMass(), InfluenceDrift(), InfluenceSwitch(), InfluenceFlee()
     noisy = pm.params(step_noise=0.5)
     partner = pm.partner_reset(jpm.ResetDraws(jnp.asarray(5)), noisy)
     returns = drift.params(returns=0.3)
@@ -208,6 +225,7 @@ def _draws(keys):
                 "drift_next": drift.partner_update(jnp.asarray(0), jnp.asarray(1),
                                                    drift.update_draws(k, returns), returns),
                 "switch_mode": switch.reset_draws(k, None).mode,
+                "flee_slot": flee.partner_reset(flee.reset_draws(k, None), None),
                 "driving_right": Driving2D().reset_draws(k, None).right}
 
     return jax.vmap(one)(keys)
@@ -223,6 +241,9 @@ def test_the_partners_draws_have_the_references_distributions() -> None:
     assert abs(counts[1] - 0.7) < 0.03
     assert set(d["drift_index"].tolist()) == set(range(8))
     assert set(d["switch_mode"].tolist()) == {0, 1, 2}
+    # rng.integers(0, 8) over the slots away from home
+    assert set(d["flee_slot"].tolist()) == {-4, -3, -2, -1, 1, 2, 3, 4}
+    assert np.bincount(d["flee_slot"] + 4, minlength=9).max() < 4096 / 8 * 1.15
     assert abs(d["driving_right"].mean() - 0.5) < 0.03  # rng.choice([-1, 1])
 
 
@@ -276,12 +297,47 @@ def test_the_jax_switch_greedy_policy_earns_its_known_return() -> None:
     assert np.allclose(returns.mean(), -0.5, atol=1e-6)
 
 
+def test_the_jax_flee_partner_moves_as_the_reference_from_every_slot_and_end() -> None:
+    """Every (slot, end slot) pair, the home's stay included, which random play rarely meets."""
+    from lili.envs.influence.flee import fled
+
+    k, k_end = np.meshgrid(np.arange(-4, 5), np.arange(-4, 5))
+    got = np.asarray(jax.jit(jflee.fled)(jnp.asarray(k), jnp.asarray(k_end)))
+    want = np.vectorize(fled)(k, k_end)
+    np.testing.assert_array_equal(got, want)
+    assert want[4, 4] == 0  # home, the ego stopped on it: it stays
+
+
+def test_the_jax_flee_greedy_and_influencer_earn_their_known_returns() -> None:
+    """Told the strategy, in the scan: greedy cycles the eight slots away from home (-0.625),
+    the influencer, one slot beyond the partner on the last step, holds it home (0)
+    (:mod:`lili.envs.influence.flee`)."""
+    env = InfluenceFlee()
+
+    def policy(beyond: float):
+        def act(key, obs, info):
+            g = info["strategy"]
+            target = jnp.clip(g + jnp.where(info["t"] == 3, beyond, 0.0) * jnp.sign(g), -1, 1)
+            return jnp.clip((target - obs) / env.speed, -1.0, 1.0)
+        return act
+
+    for beyond, known, held in ((0.0, -0.625, 0.0), (0.25, 0.0, 1.0)):
+        _, _, tr = rollout_one(env, policy(beyond), jax.random.PRNGKey(2), env.params(), 4, 60)
+        returns = np.asarray(tr.reward.sum(axis=1))[-48:]
+        assert np.allclose(returns.mean(), known, atol=1e-6)
+        home = np.asarray(tr.info["strategy_id"][-48:, 0]) == 4
+        assert home.mean() == held
+
+
 @pytest.mark.parametrize(("call", "message"), [
     (lambda: PointMass().params(history=17), "history=17 is invalid; allowed: an integer from 1"),
     (lambda: PointMass().params(step_noise=-1.0), "step_noise=-1.0 is invalid"),
     (lambda: PointMass().params(inside_turn="up"), "inside_turn='up' is invalid"),
     (lambda: InfluenceDrift().params(returns=2), "returns=2 is invalid"),
     (lambda: InfluenceSwitch().params(horizon=3), "horizon=3 is invalid; allowed: an integer >= 4"),
+    (lambda: InfluenceFlee().params(horizon=3), "horizon=3 is invalid; allowed: an integer >= 4"),
+    (lambda: make("influence-flee", returns=0.1),
+     r"env kwargs \['returns'\] are not taken by the JAX lili/InfluenceFlee-v0; allowed: horizon"),
     (lambda: Driving2D().params(history=0), "history=0 is invalid; allowed: an integer >= 1"),
     (lambda: make("lunar-lander"), "env 'lunar-lander' has no JAX version; allowed:"),
     (lambda: make("point-mass", sigma=0.2), r"env kwargs \['sigma'\] are not taken"),

@@ -57,8 +57,9 @@ def test_noise_and_history_expand_to_the_paper_tables(tmp_path: Path) -> None:
 
 def test_the_influence_suite_is_a_preset_outside_paper(tmp_path: Path) -> None:
     specs = plan(get_preset("influence"), tmp_path)
-    assert {s.env for s in specs} == {"lili/InfluenceDrift-v0", "lili/InfluenceSwitch-v0"}
-    assert len(specs) == 2 * 5 * 3 and {s.interactions for s in specs} == {2000}
+    assert {s.env for s in specs} == {"lili/InfluenceDrift-v0", "lili/InfluenceSwitch-v0",
+                                      "lili/InfluenceFlee-v0"}
+    assert len(specs) == 3 * 5 * 3 and {s.interactions for s in specs} == {2000}
     assert {s.algo for s in specs} == {"sac", "lili-no-influence", "lili", "oracle", "oracle-last"}
     assert "influence" not in PRESETS["paper"].includes
     # Drift's version is written into every run's config (its default changed once).
@@ -248,7 +249,7 @@ def _snapshot(root: Path) -> dict[str, bytes]:
     (["point-mass", "--interactions", "-1"], "--interactions -1 is invalid"),
     (["air-hockey", "--algos", "slac"], "--algos slac is not in preset 'air-hockey'; allowed"),
     (["influence", "--envs", "point-mass"], "--envs point-mass is not in preset 'influence'; "
-     "allowed: lili/InfluenceDrift-v0, lili/InfluenceSwitch-v0"),
+     "allowed: lili/InfluenceDrift-v0, lili/InfluenceSwitch-v0, lili/InfluenceFlee-v0"),
     (["influence", "--envs", "nowhere"], "unknown env 'nowhere'; allowed:"),
 ])
 def test_bad_input_is_one_clear_error(tmp_path: Path, capsys, argv, message) -> None:

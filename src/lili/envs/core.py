@@ -162,6 +162,7 @@ ENV_ALIASES: dict[str, str] = {
     "air-hockey": "lili/AirHockey-v0",
     "influence-drift": "lili/InfluenceDrift-v0",
     "influence-switch": "lili/InfluenceSwitch-v0",
+    "influence-flee": "lili/InfluenceFlee-v0",
 }
 
 
@@ -189,6 +190,7 @@ def register_envs() -> None:
         "lili/AirHockey-v0": "lili.envs.air_hockey:AirHockeyEnv",
         "lili/InfluenceDrift-v0": "lili.envs.influence:InfluenceDriftEnv",
         "lili/InfluenceSwitch-v0": "lili.envs.influence:InfluenceSwitchEnv",
+        "lili/InfluenceFlee-v0": "lili.envs.influence:InfluenceFleeEnv",
     }
     for env_id, entry in specs.items():
         if env_id not in gym.registry:

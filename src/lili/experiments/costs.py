@@ -78,6 +78,11 @@ COSTS: dict[tuple[str, str, int], tuple[float, float]] = {
     ("lili/InfluenceSwitch-v0", "lili-no-influence", 1): (20.0, 0.066),
     ("lili/InfluenceSwitch-v0", "lili", 1): (20.0, 0.067),
     ("lili/InfluenceSwitch-v0", "oracle", 1): (20.0, 0.046),
+    # Not measured yet: Switch's, whose horizon, sizes and updates per interaction Flee shares.
+    ("lili/InfluenceFlee-v0", "sac", 1): (20.0, 0.047),
+    ("lili/InfluenceFlee-v0", "lili-no-influence", 1): (20.0, 0.066),
+    ("lili/InfluenceFlee-v0", "lili", 1): (20.0, 0.067),
+    ("lili/InfluenceFlee-v0", "oracle", 1): (20.0, 0.046),
 }
 
 

@@ -177,7 +177,7 @@ def _quickstart() -> Preset:
                   metric="final return and success: mean over the last 10% of interactions")
 
 
-INFLUENCE_ENVS = ("lili/InfluenceDrift-v0", "lili/InfluenceSwitch-v0")
+INFLUENCE_ENVS = ("lili/InfluenceDrift-v0", "lili/InfluenceSwitch-v0", "lili/InfluenceFlee-v0")
 # Written out although it is the default, so that a run's config.yaml says which Drift it met:
 # runs of the first version (returns=0) then count as another config, not as finished runs.
 INFLUENCE_KWARGS: dict[str, dict[str, Any]] = {"lili/InfluenceDrift-v0": {"returns": 0.05}}

@@ -8,6 +8,10 @@ policies are known by construction, with those policies scripted next to each en
 - ``lili/InfluenceSwitch-v0`` (:mod:`.switch`): the partner's next mode is a known function of
   its mode and of the direction of the ego's last action. Knowing the mode is worth 1.05,
   steering it to the cheap mode 0.45 more.
+- ``lili/InfluenceFlee-v0`` (:mod:`.flee`): a partner on nine slots that flees one slot from
+  where the ego stopped and stays home (at the start) once chased there. Knowing the slot is
+  worth 1.58 per interaction, chasing it home 0.625 more; the partner is deterministic, so the
+  last interaction tells the next slot exactly.
 - ``lili/PointMass-v0`` (the paper's task; scripted policies in :mod:`.point_mass`).
 
 :data:`SUITE` maps each env id to its scripted policies (name -> factory(seed) -> policy) and
@@ -20,30 +24,33 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from lili.envs.influence import drift, point_mass, switch
+from lili.envs.influence import drift, flee, point_mass, switch
 from lili.envs.influence.drift import InfluenceDriftEnv
+from lili.envs.influence.flee import InfluenceFleeEnv
 from lili.envs.influence.scripted import Rollout, ScriptedPolicy, play
 from lili.envs.influence.switch import InfluenceSwitchEnv
 
-__all__ = ["SUITE", "POLICIES", "HELD", "InfluenceDriftEnv", "InfluenceSwitchEnv", "Rollout",
-           "ScriptedPolicy", "play"]
+__all__ = ["SUITE", "POLICIES", "HELD", "InfluenceDriftEnv", "InfluenceFleeEnv",
+           "InfluenceSwitchEnv", "Rollout", "ScriptedPolicy", "play"]
 
 POLICIES = ("no-information", "greedy", "influencer")
 
 SUITE: dict[str, tuple[dict[str, Callable[[int], ScriptedPolicy]], dict[str, float]]] = {
     "lili/InfluenceDrift-v0": (drift.SCRIPTED, drift.KNOWN_RETURNS),
     "lili/InfluenceSwitch-v0": (switch.SCRIPTED, switch.KNOWN_RETURNS),
+    "lili/InfluenceFlee-v0": (flee.SCRIPTED, flee.KNOWN_RETURNS),
     "lili/PointMass-v0": (point_mass.SCRIPTED, point_mass.KNOWN_RETURNS),
 }
 
 
 # The strategy ids the scripted influencer holds the partner at in the long run (the greedy
-# policy drives Drift to its walls, ids 0 and 7, between returns, and cycles Switch through all
-# three modes):
+# policy drives Drift to its walls, ids 0 and 7, between returns, cycles Switch through all
+# three modes and Flee through its eight slots away from home):
 # the share of interactions spent there is the behavioural evidence of influence.
 HELD: dict[str, tuple[int, ...]] = {
     "lili/InfluenceDrift-v0": (3, 4),  # g = -0.125, +0.125
     "lili/InfluenceSwitch-v0": (switch.MIDDLE,),
+    "lili/InfluenceFlee-v0": (flee.HOME,),  # g = 0
 }
 
 

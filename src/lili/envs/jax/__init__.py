@@ -1,10 +1,10 @@
 """JAX-native repeated-interaction envs: the cheap domains as pure functions (gymnax style).
 
 Point Mass (:class:`PointMass`, with its noisy and history partners), Driving (2D)
-(:class:`Driving2D`) and the influence suite's :class:`InfluenceDrift` and
-:class:`InfluenceSwitch`. The Gymnasium envs (:mod:`lili.envs.point_mass`,
-:mod:`lili.envs.driving2d`, :mod:`lili.envs.influence`) are the reference;
-these follow their rules step for step (``tests/test_jax_envs.py`` checks it), with the
+(:class:`Driving2D`) and the influence suite's :class:`InfluenceDrift`,
+:class:`InfluenceSwitch` and :class:`InfluenceFlee`. The Gymnasium envs
+(:mod:`lili.envs.point_mass`, :mod:`lili.envs.driving2d`, :mod:`lili.envs.influence`) are the
+reference; these follow their rules step for step (``tests/test_jax_envs.py`` checks it), with the
 partner's settings as a params pytree, so that a whole interaction is one ``lax.scan`` and many
 runs, at different seeds and partner settings, one ``vmap``::
 
@@ -32,13 +32,14 @@ from lili.envs.core import resolve_env_id
 from lili.envs.jax.core import EnvState, JaxRepeatedEnv, stack
 from lili.envs.jax.drift import InfluenceDrift
 from lili.envs.jax.driving2d import Driving2D
+from lili.envs.jax.flee import InfluenceFlee
 from lili.envs.jax.point_mass import PointMass
 from lili.envs.jax.rollout import Transition, UniformPolicy, interaction, rollout, rollout_many
 from lili.envs.jax.switch import InfluenceSwitch
 
 __all__ = ["JAX_ENVS", "Driving2D", "EnvState", "JaxRepeatedEnv", "InfluenceDrift",
-           "InfluenceSwitch", "PointMass", "Transition", "UniformPolicy", "interaction", "make",
-           "rollout", "rollout_many", "stack"]
+           "InfluenceFlee", "InfluenceSwitch", "PointMass", "Transition", "UniformPolicy",
+           "interaction", "make", "rollout", "rollout_many", "stack"]
 
 # Gymnasium id -> the JAX env that follows it.
 JAX_ENVS: dict[str, type[JaxRepeatedEnv]] = {
@@ -46,6 +47,7 @@ JAX_ENVS: dict[str, type[JaxRepeatedEnv]] = {
     "lili/Driving2D-v0": Driving2D,
     "lili/InfluenceDrift-v0": InfluenceDrift,
     "lili/InfluenceSwitch-v0": InfluenceSwitch,
+    "lili/InfluenceFlee-v0": InfluenceFlee,
 }
 
 

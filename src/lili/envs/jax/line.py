@@ -2,7 +2,8 @@
 an ego on a line that starts each interaction at x = 0, moves ``x <- clip(x + speed * a, -1,
 1)`` and pays ``-|x - goal|`` after the move. Its state (:class:`LineState`) is ``x`` and the
 last action (what Switch's partner reads); it observes ``[x]``. Subclasses give ``speed`` and
-the partner's ``goal``.
+the partner's ``goal``; :class:`HorizonOnlyLineEnv` is the base of those whose only option is
+the horizon and whose partner draws nothing after its first strategy (Switch, Flee).
 """
 
 from __future__ import annotations
@@ -13,9 +14,10 @@ import jax
 import jax.numpy as jnp
 from flax import struct
 
+from lili.envs.influence.line import check_horizon
 from lili.envs.jax.core import JaxRepeatedEnv
 
-__all__ = ["JaxLineEnv", "LineState"]
+__all__ = ["HorizonOnlyLineEnv", "HorizonParams", "JaxLineEnv", "LineState"]
 
 
 @struct.dataclass
@@ -48,3 +50,21 @@ class JaxLineEnv(JaxRepeatedEnv):
         x = jnp.clip(ego.x + self.speed * a, -1.0, 1.0)
         return LineState(x=x, last_action=a), -jnp.abs(x - self.goal(partner)), \
             jnp.asarray(False)
+
+
+@struct.dataclass
+class HorizonParams:
+    horizon: jax.Array
+
+
+class HorizonOnlyLineEnv(JaxLineEnv):
+    """A line env whose only option is the horizon (4 by default, at least 4, as in the
+    Gymnasium env) and whose partner's updates draw nothing (``UpdateDraws`` is the empty
+    tuple)."""
+
+    def params(self, horizon: int = 4) -> HorizonParams:
+        """Params from the Gymnasium env's keyword arguments, checked as it checks them."""
+        return HorizonParams(horizon=jnp.asarray(check_horizon(horizon, 4), jnp.int32))
+
+    def update_draws(self, key: jax.Array, params: HorizonParams) -> tuple[()]:
+        return ()

@@ -19,9 +19,8 @@ import jax.numpy as jnp
 import numpy as np
 from flax import struct
 
-from lili.envs.influence.line import check_horizon
 from lili.envs.influence.switch import DEADBAND, GOALS, NEXT_MODE, SPEED
-from lili.envs.jax.line import JaxLineEnv, LineState
+from lili.envs.jax.line import HorizonOnlyLineEnv, HorizonParams, LineState
 
 __all__ = ["InfluenceSwitch", "SwitchParams", "ResetDraws", "NEXT_MODE_TABLE"]
 
@@ -35,9 +34,7 @@ if _DEADBAND32 > DEADBAND:
     _DEADBAND32 = np.nextafter(_DEADBAND32, np.float32(0))
 
 
-@struct.dataclass
-class SwitchParams:
-    horizon: jax.Array
+SwitchParams = HorizonParams  # Switch's only option is its horizon
 
 
 @struct.dataclass
@@ -46,21 +43,14 @@ class ResetDraws:
 
 
 @dataclass(frozen=True)
-class InfluenceSwitch(JaxLineEnv):
+class InfluenceSwitch(HorizonOnlyLineEnv):
     """``lili/InfluenceSwitch-v0`` in JAX (see the module docstring)."""
 
     speed: float = SPEED
     strategy_shape: tuple[int, ...] = (3,)
 
-    def params(self, horizon: int = 4) -> SwitchParams:
-        """Params from the Gymnasium env's keyword arguments, checked as it checks them."""
-        return SwitchParams(horizon=jnp.asarray(check_horizon(horizon, 4), jnp.int32))
-
     def reset_draws(self, key: jax.Array, params: SwitchParams) -> ResetDraws:
         return ResetDraws(jax.random.randint(key, (), 0, len(GOALS)))
-
-    def update_draws(self, key: jax.Array, params: SwitchParams) -> tuple[()]:
-        return ()
 
     def partner_reset(self, draws: ResetDraws, params: SwitchParams) -> jax.Array:
         return jnp.asarray(draws.mode, jnp.int32)
