@@ -56,7 +56,7 @@ from lili.many import StackedBuffers, _windows, check_group_memory
 from lili.metrics_file import plays_at_random
 from lili.train import NonFiniteError, Stream, _progress_bar, run_interaction_keys
 
-__all__ = ["JAX_ALGOS", "JaxRuns", "check_jax_run"]
+__all__ = ["JAX_ALGOS", "JaxRuns", "check_jax_run", "why_not_jax"]
 
 JAX_ALGOS = ("sac", "lili", "lili-no-influence", "oracle", "oracle-last")
 """The algos this path trains: the generic SAC core and LILI's (their update is the shared
@@ -93,6 +93,19 @@ def check_jax_run(algo: str, env: str) -> str:
         raise ValueError(f"algo {algo!r} has no JAX-native training (--backend jax); allowed: "
                          f"{', '.join(JAX_ALGOS)}")
     return env_id
+
+
+def why_not_jax(algo: str, env: str, env_kwargs: Mapping[str, Any] | None = None) -> str | None:
+    """None when runs of ``algo`` on ``env`` with ``env_kwargs`` can train on this path (what
+    ``lili reproduce --backend jax`` sends through it), else why not (one phrase)."""
+    from lili.envs import jax as jax_envs
+
+    try:
+        env_id = check_jax_run(algo, env)
+        jax_envs.make(env_id, **dict(env_kwargs or {}))
+    except ValueError as e:
+        return str(e).split(";")[0].replace(" (--backend jax)", "")
+    return None
 
 
 def _device_free() -> int | None:
