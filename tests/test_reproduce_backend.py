@@ -66,8 +66,8 @@ def test_the_dry_run_says_which_runs_take_which_path(tmp_path: Path, capsys) -> 
     out = capsys.readouterr().out
     assert "PointMass-v0/oracle/seed_0  (6 interactions" in out and "backend jax)" in out
     assert "PointMass-v0/lilac/seed_0" in out and "backend gym)" in out
-    assert ("--backend jax: 2 runs on the JAX-native path, 1 on the Gymnasium path "
-            "(lili/PointMass-v0 lilac: algo 'lilac' has no JAX-native training)") in out
+    assert ("--backend jax: 2 runs on the JAX-native path, 1 on the Gymnasium path: algo "
+            "'lilac' has no JAX-native training (1 runs)") in out
     assert not (tmp_path / "o").exists()
 
 

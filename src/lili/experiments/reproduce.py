@@ -61,16 +61,20 @@ def check_device(device: str | None, here: bool = True) -> None:
 
 def _backend_line(specs: list[RunSpec]) -> str:
     """What ``--backend jax`` does with ``specs``: how many runs take the JAX-native path, and
-    which (env, algo) stay on the Gymnasium path and why."""
+    why the others stay on the Gymnasium path (each reason with its count of runs)."""
     jax_runs = sum(s.backend == "jax" for s in specs)
-    stay: dict[tuple[str, str], str] = {}
+    why: dict[str, int] = {}
+    reasons: dict[tuple[str, str, str], str] = {}
     for s in specs:
         if s.backend != "jax":
-            stay.setdefault((s.env, s.algo), jax_reason(s) or "")
+            key = (s.env, s.algo, repr(sorted(s.env_kwargs.items())))
+            if key not in reasons:
+                reasons[key] = jax_reason(s) or "planned for the Gymnasium path"
+            why[reasons[key]] = why.get(reasons[key], 0) + 1
     line = f"  --backend jax: {jax_runs} runs on the JAX-native path"
-    if stay:
-        line += (f", {len(specs) - jax_runs} on the Gymnasium path ("
-                 + "; ".join(f"{env} {algo}: {why}" for (env, algo), why in stay.items()) + ")")
+    if why:
+        line += (f", {len(specs) - jax_runs} on the Gymnasium path: "
+                 + "; ".join(f"{reason} ({n} runs)" for reason, n in why.items()))
     return line
 
 
