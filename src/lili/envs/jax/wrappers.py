@@ -69,9 +69,11 @@ class _Wrapper:
         return self.env.params(**env_kwargs)
 
     def reset_draws(self, key: jax.Array, params: Any) -> Any:
+        """The wrapped env's draws for a fresh sequence."""
         return self.env.reset_draws(key, params)
 
     def update_draws(self, key: jax.Array, params: Any) -> Any:
+        """The wrapped env's draws for one partner update."""
         return self.env.update_draws(key, params)
 
     def reset(self, key: jax.Array, params: Any) -> tuple[jax.Array, Any]:
@@ -84,10 +86,12 @@ class _Wrapper:
         return self.step_with(self.update_draws(key, params), state, action, params)
 
     def reset_with(self, draws: Any, params: Any) -> tuple[jax.Array, Any]:
+        """:meth:`reset` given the partner's draws."""
         raise NotImplementedError
 
     def step_with(self, draws: Any, state: Any, action: jax.Array,
                   params: Any) -> tuple[jax.Array, Any, jax.Array, jax.Array, Info]:
+        """:meth:`step` given the partner's draws."""
         raise NotImplementedError
 
 
