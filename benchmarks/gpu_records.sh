@@ -4,15 +4,16 @@
 #     OUT=/some/folder bash benchmarks/gpu_records.sh        # SMOKE=1: tiny budget, any CPU
 #
 # SAC and the Oracle against the noisy partner (sigma 0.4 and 1.0) and the history-dependent
-# one (N = 5 and 11), 3 seeds each, the preset's budget (2000 interactions) and config: the
-# Oracle through `lili train --seeds 0-2` (lili.many: the Gymnasium envs, the code path of a
-# CPU run), SAC through `--backend jax` (lili.jax_train: the JAX twin of the env, one program
-# per interaction; its config.yaml says backend: jax), eight processes at once sharing the GPU
-# (no XLA preallocation). The run folders land in the
-# layout of `lili reproduce noise|history` (noise/sigma_0.4/PointMass-v0/sac/seed_0, ...) and
-# come back as $OUT/records.tar.gz holding config.yaml, metrics.csv and summary.json of each
-# run (no checkpoints, no TensorBoard). Every process has the same time limit (CAP seconds); a
-# run cut short keeps its metrics.csv and has no summary.json.
+# one (N = 5 and 11), 3 seeds each, the preset's budget (2000 interactions) and config, both
+# through `lili train --backend jax --seeds 0-2` (lili.jax_train: the JAX twin of the env, one
+# program per interaction; the Oracle observes the strategy through lili.envs.jax.wrappers; the
+# config.yaml says backend: jax), eight processes at once sharing the GPU (no XLA
+# preallocation); ALGOS=oracle trains the Oracle's cells only (default "sac oracle"). The run
+# folders land in the layout of `lili reproduce noise|history`
+# (noise/sigma_0.4/PointMass-v0/sac/seed_0, ...) and come back as $OUT/records.tar.gz holding
+# config.yaml, metrics.csv and summary.json of each run (no checkpoints, no TensorBoard). Every
+# process has the same time limit (CAP seconds); a run cut short keeps its metrics.csv and has
+# no summary.json.
 set -o pipefail
 cd "$(dirname "$0")/.."
 OUT=${OUT:-/tmp/gpu_records}
@@ -26,15 +27,14 @@ RUNS=$(mktemp -d)
 if [ "${SMOKE:-0}" = 1 ]; then N=4; SEEDS=0-1; else N=2000; SEEDS=0-2; fi
 START=$(date +%s)
 pids=()
-for algo in sac oracle; do
-    backend=(); [ "$algo" = sac ] && backend=(--backend jax)
+for algo in ${ALGOS:-sac oracle}; do
     for cell in "noise/sigma_0.4 step_noise=0.4" "noise/sigma_1 step_noise=1.0" \
                 "history/n_5 history=5" "history/n_11 history=11"; do
         set -- $cell
         mkdir -p "$RUNS/logs"
         timeout --kill-after=10 "$CAP" "$PY" -m lili.cli train point-mass --algo "$algo" \
             --seeds "$SEEDS" --interactions "$N" --env-kwarg "$2" --out "$RUNS/$1" \
-            --no-progress "${backend[@]}" > "$RUNS/logs/${1//\//_}-$algo.log" 2>&1 &
+            --no-progress --backend jax > "$RUNS/logs/${1//\//_}-$algo.log" 2>&1 &
         pids+=($!)
     done
 done

@@ -60,9 +60,10 @@ from lili.envs.jax.core import JaxRepeatedEnv
 from lili.envs.point_mass import STEP, PointMassEnv
 
 # One compiled function per env class and shapes, shared by the cases (the env is static).
-reset_with = jax.jit(JaxRepeatedEnv.reset_with, static_argnums=0)
-step_with = jax.jit(JaxRepeatedEnv.step_with, static_argnums=0)
-next_interaction = jax.jit(JaxRepeatedEnv.next_interaction, static_argnums=0)
+# Called on the env (not JaxRepeatedEnv's functions): the Oracles' wrappers are played too.
+reset_with = jax.jit(lambda env, *args: env.reset_with(*args), static_argnums=0)
+step_with = jax.jit(lambda env, *args: env.step_with(*args), static_argnums=0)
+next_interaction = jax.jit(lambda env, *args: env.next_interaction(*args), static_argnums=0)
 step = jax.jit(JaxRepeatedEnv.step, static_argnums=0)
 rollout_one = jax.jit(rollout, static_argnums=(0, 1, 4, 5))
 
@@ -122,15 +123,19 @@ def _close(a, b, what):
                                rtol=0, err_msg=what)
 
 
-def _play_both(case: str, seed: int = 3):
+def _play_both(case: str, seed: int = 3, wrap_gym=None, wrap_jax=None):
     """Play both envs side by side (see the module docstring); return the per-interaction
-    outcomes, successes and strategies for the checks that the case exercised something."""
+    outcomes, successes and strategies for the checks that the case exercised something.
+    ``wrap_gym`` / ``wrap_jax``: what an agent observes of each (the Oracles' wrappers), whose
+    observations are then the ones compared."""
     (gym_cls, jenv, reset_draws, update_draws), kwargs, n = CASES[case]
-    genv = gym_cls(**kwargs)
+    inner = gym_cls(**kwargs)
+    genv = wrap_gym(inner) if wrap_gym else inner
+    jenv = wrap_jax(jenv) if wrap_jax else jenv
     params = jenv.params(**kwargs)
     rng = np.random.default_rng(seed)
     g_obs, g_info = genv.reset(seed=seed)
-    j_obs, state = reset_with(jenv, reset_draws(genv), params)
+    j_obs, state = reset_with(jenv, reset_draws(inner), params)
     outcomes, successes, strategies = [], [], []
     for i in range(n):
         if i:
@@ -143,11 +148,11 @@ def _play_both(case: str, seed: int = 3):
         assert int(info["interaction"]) == g_info["interaction"] == i
         strategies.append(np.asarray(g_info["strategy"]))
         # A drift that ends some interactions a long way out and others near the start.
-        drift = rng.uniform(-1, 1, genv.action_space.shape) * min(1.0, 10 / genv.horizon)
+        drift = rng.uniform(-1, 1, genv.action_space.shape) * min(1.0, 10 / inner.horizon)
         while True:
             action = np.clip(drift + rng.uniform(-1, 1, drift.shape), -1.5, 1.5).astype(
                 np.float32)
-            draws = update_draws(copy.deepcopy(genv._partner_rng))
+            draws = update_draws(copy.deepcopy(inner._partner_rng))
             g_obs, g_r, g_term, g_trunc, g_info = genv.step(action)
             j_obs, state, j_r, j_done, j_info = step_with(jenv, draws, state, action, params)
             where = f"{case}: interaction {i} step {g_info['t']}"

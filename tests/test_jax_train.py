@@ -119,7 +119,7 @@ def test_a_stopped_group_resumes_to_the_numbers_of_an_uninterrupted_one(tmp_path
 
 
 @pytest.mark.parametrize(("args", "message"), [
-    (["--algo", "oracle"], "algo 'oracle' has no JAX-native training"),
+    (["--algo", "slac"], "algo 'slac' has no JAX-native training"),
     (["--algo", "lili", "--env-kwarg", "bogus=1"], "bogus"),
     (["--resume"], "there is no run to resume"),
 ])

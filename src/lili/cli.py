@@ -393,7 +393,7 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
               overrides=parse_overrides(args.set),
               env_kwargs=_parse_kwargs(args.env_kwarg),
               check_only=args.check_only, sources=args.sources, group=args.group,
-              device=args.device, paper_settings=args.paper_settings)
+              device=args.device, paper_settings=args.paper_settings, backend=args.backend)
     return 0
 
 
@@ -438,6 +438,7 @@ def cmd_play(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     from lili.agents import ALGOS
+    from lili.experiments.plan import BACKENDS
 
     p = _Parser(prog="lili", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True)
@@ -456,10 +457,10 @@ def build_parser() -> argparse.ArgumentParser:
     t.add_argument("--env-kwarg", action="append", default=[], metavar="KEY=VALUE",
                    help="env option, e.g. step_noise=0.2 or history=3 (repeatable)")
     t.add_argument("--resume", action="store_true", help="continue the run in the folder")
-    t.add_argument("--backend", choices=("gym", "jax"), default="gym",
+    t.add_argument("--backend", choices=BACKENDS, default="gym",
                    help="gym: the Gymnasium env (default); jax: its JAX twin, all seeds as one "
-                        "jitted program per interaction (sac, lili, lili-no-influence on "
-                        "point-mass, driving-2d and the influence envs)")
+                        "jitted program per interaction (sac, lili, lili-no-influence, oracle, "
+                        "oracle-last on point-mass, driving-2d and the influence envs)")
     t.add_argument("--no-progress", action="store_true", help="no progress bar")
     t.set_defaults(func=cmd_train)
 
@@ -508,6 +509,10 @@ def build_parser() -> argparse.ArgumentParser:
     x.add_argument("--device", metavar="{cpu,gpu}",
                    help="JAX platform of the runs' processes (default: JAX's choice); with "
                         "gpu, several processes share the GPU (no memory preallocation)")
+    x.add_argument("--backend", choices=BACKENDS, default="gym",
+                   help="jax: the runs whose env and algo the JAX-native path supports train "
+                        "there (lili train --backend jax), the others on the Gymnasium envs "
+                        "(--dry-run lists which)")
     x.add_argument("--paper-settings", action="store_true",
                    help="the paper's literal setting where a preset departs from it (air "
                         "hockey: 1000 interactions, no random interactions; Lunar Lander: the "

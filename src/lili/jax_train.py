@@ -1,8 +1,8 @@
 # Over 400 lines: the one jitted program (play, store, update) and the run loop that logs it.
 """Many runs as one jitted program per interaction, on the JAX-native envs (``--backend jax``).
 
-:class:`JaxRuns` trains K runs of one core (SAC, LILI or LILI without influence) on the JAX
-twin of their env (:mod:`lili.envs.jax`: Point Mass with any partner, Driving (2D), the
+:class:`JaxRuns` trains K runs of one core (SAC, LILI, LILI without influence or an Oracle) on
+the JAX twin of their env (:mod:`lili.envs.jax`: Point Mass with any partner, Driving (2D), the
 influence suite). Where :func:`lili.many.train_many` steps K Gymnasium envs in Python, here one
 interaction of all K runs is ONE call of one jitted program, vmapped over the runs (PureJaxRL's
 ``make_train`` idea):
@@ -56,11 +56,12 @@ from lili.many import StackedBuffers, _windows, check_group_memory
 from lili.metrics_file import plays_at_random
 from lili.train import NonFiniteError, Stream, _progress_bar, run_interaction_keys
 
-__all__ = ["JAX_ALGOS", "JaxRuns", "check_jax_run"]
+__all__ = ["JAX_ALGOS", "JaxRuns", "check_jax_run", "why_not_jax"]
 
-JAX_ALGOS = ("sac", "lili", "lili-no-influence")
+JAX_ALGOS = ("sac", "lili", "lili-no-influence", "oracle", "oracle-last")
 """The algos this path trains: the generic SAC core and LILI's (their update is the shared
-block; the Oracle's observation wrapper and the contrib algos have no JAX version)."""
+block), the Oracles on their observation of the JAX env (:meth:`wrap_jax_env`,
+:mod:`lili.envs.jax.wrappers`); the contrib algos have no JAX version."""
 
 # fold_in datum of the env's key stream (interaction indices stay far below it).
 _ENV_STREAM = 2**31 - 1
@@ -92,6 +93,19 @@ def check_jax_run(algo: str, env: str) -> str:
         raise ValueError(f"algo {algo!r} has no JAX-native training (--backend jax); allowed: "
                          f"{', '.join(JAX_ALGOS)}")
     return env_id
+
+
+def why_not_jax(algo: str, env: str, env_kwargs: Mapping[str, Any] | None = None) -> str | None:
+    """None when runs of ``algo`` on ``env`` with ``env_kwargs`` can train on this path (what
+    ``lili reproduce --backend jax`` sends through it), else why not (one phrase)."""
+    from lili.envs import jax as jax_envs
+
+    try:
+        env_id = check_jax_run(algo, env)
+        jax_envs.make(env_id, **dict(env_kwargs or {}))
+    except ValueError as e:
+        return str(e).split(";")[0].replace(" (--backend jax)", "")
+    return None
 
 
 def _device_free() -> int | None:
@@ -268,11 +282,16 @@ class JaxRuns:
             if key not in made_by:
                 made_by[key] = jax_envs.make(self.env_id, **kw)
         made = [made_by[repr(sorted(kw.items()))] for kw in self.env_kwargs]
-        self.env = made[0][0]
         # The core and the action bounds are the Gymnasium agent's: one definition of both.
         self.agent = make_agent(algo, make_env(self.env_id, self.env_kwargs[0]), config,
                                 self.seeds[0])
         core = self.core = self.agent.core
+        # What the agent observes of the JAX env (the Oracles: the strategy appended).
+        self.env = self.agent.wrap_jax_env(made[0][0])
+        if tuple(self.env.observation_shape) != (core.obs_dim,):
+            raise ValueError(f"{algo} observes {core.obs_dim} numbers of {self.env_id}'s "
+                             f"Gymnasium env and {self.env.observation_shape} of its JAX twin; "
+                             "the two must agree")
         horizons = sorted({int(p.horizon) for _, p in made})
         if horizons != [core.horizon]:
             raise ValueError(f"the runs of one group share one horizon; env kwargs give "

@@ -114,6 +114,11 @@ class AgentFacade:
         loop that plays a user's env with this agent wraps it with this first."""
         return env
 
+    def wrap_jax_env(self, env: Any) -> Any:
+        """A JAX-native env (:mod:`lili.envs.jax`) as this agent observes it, the twin of
+        :meth:`wrap_env` for :mod:`lili.jax_train`."""
+        return env
+
     # -- what the loops read ---------------------------------------------------------------------
     @property
     def boundary(self) -> str:

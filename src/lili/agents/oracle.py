@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import gymnasium as gym
 
@@ -41,6 +42,11 @@ class Oracle(SAC):
 
         return env if isinstance(env, OracleObservation) else OracleObservation(env)
 
+    def wrap_jax_env(self, env: Any) -> Any:
+        from lili.envs.jax.wrappers import StrategyObservation
+
+        return env if isinstance(env, StrategyObservation) else StrategyObservation(env)
+
 
 class LastInteractionOracle(Oracle):
     """SAC on :class:`~lili.envs.wrappers.LastInteractionObservation`: told the partner's
@@ -62,8 +68,17 @@ class LastInteractionOracle(Oracle):
 
         if isinstance(env, LastInteractionObservation):
             return env
-        options = dataclass_options(self.config, "oracle-last", OracleLastOptions)
-        return LastInteractionObservation(env, outcome=options.outcome)
+        return LastInteractionObservation(env, outcome=self._options().outcome)
+
+    def wrap_jax_env(self, env: Any) -> Any:
+        from lili.envs.jax.wrappers import LastInteractionObservation
+
+        if isinstance(env, LastInteractionObservation):
+            return env
+        return LastInteractionObservation(env, outcome=self._options().outcome)
+
+    def _options(self) -> OracleLastOptions:
+        return dataclass_options(self.config, "oracle-last", OracleLastOptions)
 
 
 register("oracle", Oracle)

@@ -8,7 +8,7 @@ starts.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +23,12 @@ from lili.limits import MAX_INTERACTIONS, MAX_SEEDS, check_count
 from lili.runs import run_dir_for
 from lili.yaml_bounds import safe_load
 
-__all__ = ["RunSpec", "plan", "run_status", "QUICK_INTERACTIONS", "QUICK_CONFIG"]
+__all__ = ["RunSpec", "plan", "run_status", "jax_reason", "BACKENDS", "QUICK_INTERACTIONS",
+           "QUICK_CONFIG"]
+
+BACKENDS = ("gym", "jax")
+"""``--backend`` values: the Gymnasium envs (every run), or the JAX-native path
+(:mod:`lili.jax_train`) for the runs whose env and algo it supports."""
 
 QUICK_INTERACTIONS = 6
 # Learning starts after 3 random interactions (LILAC's prior window needs 3) and a checkpoint
@@ -48,6 +53,7 @@ class RunSpec:
     interactions: int
     env_kwargs: dict[str, Any] = field(default_factory=dict)
     config: dict[str, Any] = field(default_factory=dict)
+    backend: str = "gym"  # "jax": trained by lili.jax_train (lili train --backend jax)
 
     @property
     def run_dir(self) -> Path:
@@ -91,7 +97,7 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
          quick: bool = False, overrides: dict[str, Any] | None = None,
          envs: tuple[str, ...] | None = None,
          env_kwargs: dict[str, Any] | None = None,
-         paper_settings: bool = False) -> list[RunSpec]:
+         paper_settings: bool = False, backend: str = "gym") -> list[RunSpec]:
     """Every run of ``preset`` under ``out``, each once (presets share runs; see presets).
     ``paper_settings``: each part without its departures from the paper's setting
     (:meth:`Preset.paper_setting`).
@@ -104,8 +110,12 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
     algo of the plan reads one. ``env_kwargs``: env options set in every run,
     over the preset's own (``lili reproduce --env-kwarg``, e.g. the old air hockey game with
     ``aim_noise=0.02``); every env of the plan must take them (narrow it with ``envs``).
+    ``backend``: ``"jax"`` gives the runs whose env (with its kwargs) and algo the JAX-native
+    path supports (:func:`jax_reason`) ``backend="jax"``; the others stay ``"gym"``.
     Raises ValueError for a bad value, or when an existing run folder holds another config.
     """
+    if backend not in BACKENDS:
+        raise ValueError(f"--backend {shown(backend)} is invalid; allowed: {', '.join(BACKENDS)}")
     if seeds is not None:
         check_count(seeds, "--seeds", MAX_SEEDS)
     if interactions is not None:
@@ -149,11 +159,21 @@ def plan(preset: Preset, out: str | Path, seeds: int | None = None,
         _check_env_kwargs(result, env_kwargs)
     from lili.agents import check_config  # here: it imports JAX, which --dry-run need not
 
+    if backend == "jax":
+        result = [replace(s, backend="jax") if jax_reason(s) is None else s for s in result]
     for spec in result:
         # Before anything runs: the overrides, and what each algo demands of them.
         check_config(spec.algo, AgentConfig.from_dict(spec.config))
         run_status(spec)
     return result
+
+
+def jax_reason(spec: RunSpec) -> str | None:
+    """None when ``spec``'s env (with its kwargs) and algo train on the JAX-native path, else
+    why not (one phrase)."""
+    from lili.jax_train import why_not_jax
+
+    return why_not_jax(spec.algo, spec.env, spec.env_kwargs)
 
 
 def _check_overrides(overrides: dict[str, Any], algos: tuple[str, ...]) -> None:
@@ -228,7 +248,12 @@ def run_status(spec: RunSpec) -> str:
             raise ValueError(f"{summary} is unreadable; allowed: JSON with 'interactions' as "
                              "`lili train` writes it") from None
         if done >= spec.interactions:
-            return "done"
+            return "done"  # a finished run counts, whichever path trained it
+    have = old.get("backend", "gym") if isinstance(old, dict) else "gym"
+    if have != spec.backend:
+        raise ValueError(f"{folder} holds a run started with --backend {shown(have)}, which "
+                         "resumes only on that backend (its env's random draws differ); "
+                         f"allowed: --backend {shown(have)} for this --out, or another --out")
     return "resume"
 
 

@@ -11,7 +11,7 @@ from typing import Any
 
 from lili.errors import shown
 from lili.experiments.costs import estimate_seconds
-from lili.experiments.plan import RunSpec, plan, run_status
+from lili.experiments.plan import RunSpec, jax_reason, plan, run_status
 from lili.experiments.presets import get_preset
 from lili.experiments.progress import SweepProgress
 from lili.experiments.runner import (
@@ -59,8 +59,28 @@ def check_device(device: str | None, here: bool = True) -> None:
                 from None
 
 
+def _backend_line(specs: list[RunSpec]) -> str:
+    """What ``--backend jax`` does with ``specs``: how many runs take the JAX-native path, and
+    why the others stay on the Gymnasium path (each reason with its count of runs)."""
+    jax_runs = sum(s.backend == "jax" for s in specs)
+    why: dict[str, int] = {}
+    reasons: dict[tuple[str, str, str], str] = {}
+    for s in specs:
+        if s.backend != "jax":
+            key = (s.env, s.algo, repr(sorted(s.env_kwargs.items())))
+            if key not in reasons:
+                reasons[key] = jax_reason(s) or "planned for the Gymnasium path"
+            why[reasons[key]] = why.get(reasons[key], 0) + 1
+    line = f"  --backend jax: {jax_runs} runs on the JAX-native path"
+    if why:
+        line += (f", {len(specs) - jax_runs} on the Gymnasium path: "
+                 + "; ".join(f"{reason} ({n} runs)" for reason, n in why.items()))
+    return line
+
+
 def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: int,
-             say: Callable[[str], None], group: int = 1) -> dict[str, Any]:
+             say: Callable[[str], None], group: int = 1,
+             backend: str = "gym") -> dict[str, Any]:
     todo = [s for s in specs if status[s] != "done"]
     estimates = {s: estimate_seconds(s, rows_logged(s) if status[s] == "resume" else 0)
                  for s in todo}
@@ -72,7 +92,8 @@ def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: 
     for s in specs:
         say(f"{status[s]:6}  {s.run_dir}  ({s.interactions} interactions"
             + (f", {s.env_kwargs}" if s.env_kwargs else "")
-            + (f", config {s.config}" if s.config else "") + ")")
+            + (f", config {s.config}" if s.config else "")
+            + (f", backend {s.backend}" if backend != "gym" else "") + ")")
     by_algo: dict[tuple[str, str], float] = {}
     for s, sec in estimates.items():
         by_algo[(s.preset, s.algo)] = by_algo.get((s.preset, s.algo), 0.0) + sec
@@ -83,6 +104,8 @@ def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: 
         algos = sorted(((v, a) for (p, a), v in by_algo.items() if p == preset), reverse=True)
         say(f"  {preset}: {sec / 3600:.1f} CPU-hours ("
             + ", ".join(f"{a} {v / 3600:.1f}" for v, a in algos) + ")")
+    if backend == "jax":
+        say(_backend_line(todo))
     if group > 1:
         say(f"  {len(group_runs(todo, group))} jobs with --group {group} (the estimate is "
             "per run, one process each: runs trained together may cost less)")
@@ -133,7 +156,7 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
               report_only: bool = False, env_kwargs: dict[str, Any] | None = None,
               check_only: bool = False, sources: str | Path | None = None,
               group: int | None = None, device: str | None = None,
-              paper_settings: bool = False,
+              paper_settings: bool = False, backend: str = "gym",
               say: Callable[[str], None] = print) -> dict[str, Any]:
     """Run preset ``name`` into ``out`` and write ``out/<name>/report/``; see the module doc.
 
@@ -149,7 +172,9 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     (:func:`default_group` when None); ``device``: ``"cpu"`` or ``"gpu"`` for the runs'
     processes (None: JAX's default). ``paper_settings``: the paper's literal setting where the
     preset departs from it (:meth:`~lili.experiments.presets.Preset.departs`, printed in the
-    report's header otherwise). Every other report ends with the same claims
+    report's header otherwise). ``backend``: ``"jax"`` trains the runs whose env and algo the
+    JAX-native path supports on it (``lili train --backend jax``), the others on the
+    Gymnasium envs, as the plan (and ``dry_run``) says. Every other report ends with the same claims
     table, also written to ``out/<name>/report/claims.md``. Every value is checked and every
     existing run folder compared with the run it would become before anything is written; a bad one
     raises ValueError naming it. Runs that fail are listed (with their logs) in a ValueError
@@ -178,12 +203,12 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
         check_address(ray)
     specs = plan(preset, out, seeds=seeds, interactions=interactions, algos=algos, quick=quick,
                  overrides=overrides, envs=envs, env_kwargs=env_kwargs,
-                 paper_settings=paper_settings)
+                 paper_settings=paper_settings, backend=backend)
     status = {s: run_status(s) for s in specs}
     if dry_run and report_only:
         raise ValueError("--dry-run and --report-only are invalid together; allowed: one of them")
     if dry_run:
-        return _dry_run(name, specs, status, jobs or LOCAL_JOBS, say, group)
+        return _dry_run(name, specs, status, jobs or LOCAL_JOBS, say, group, backend)
     changes = _changes(overrides, env_kwargs)
     if report_only:
         return _report_only(name, preset, specs, status, out, say, changes, paper_settings)
@@ -193,12 +218,14 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
     t0 = time.time()
     if todo:
         jobs_todo = group_runs(todo, group)
-        backend = _start_backend(ray, jobs, out, device)
+        runner = _start_backend(ray, jobs, out, device)
         together = (f" as {len(jobs_todo)} jobs (up to {group} seeds of a cell in one process)"
                     if len(jobs_todo) < len(todo) else "")
         say(f"{name}: {len(specs)} runs, {len(specs) - len(todo)} done, {len(todo)} to run on "
-            f"{backend.description}{together}")
-        failed = _run_all(backend, jobs_todo, len(specs) - len(todo), progress)
+            f"{runner.description}{together}")
+        if backend == "jax":
+            say(_backend_line(todo))
+        failed = _run_all(runner, jobs_todo, len(specs) - len(todo), progress)
         if failed:
             lines = "\n".join(f"  {s.run_dir} (exit {c}; log {log_path(j)})"
                               for j, c in failed for s in j)

@@ -76,15 +76,15 @@ def groupable(algo: str) -> bool:
 def _cell(spec: RunSpec) -> tuple:
     """What runs of one job share: everything but the seed, and the state on disk (a job
     starts or resumes all of its runs)."""
-    return (str(spec.experiment), spec.env, spec.algo, spec.interactions,
+    return (str(spec.experiment), spec.env, spec.algo, spec.interactions, spec.backend,
             yaml.safe_dump(spec.env_kwargs, sort_keys=True),
             yaml.safe_dump(spec.config, sort_keys=True), run_status(spec) == "resume")
 
 
 def group_runs(specs: list[RunSpec], size: int = 1) -> list[Job]:
     """``specs`` as jobs of at most ``size`` runs each, in the order of each job's first run:
-    runs of one cell (same experiment, env, algo, budget, env options and agent config; new,
-    or all started) whose algo is :func:`groupable` share a job; every other run is a job of
+    runs of one cell (same experiment, env, algo, budget, backend, env options and agent config;
+    new, or all started) whose algo is :func:`groupable` share a job; every other run is a job of
     its own."""
     if size < 1:
         raise ValueError(f"--group {size} is invalid; allowed: an integer >= 1")
@@ -107,7 +107,8 @@ def group_runs(specs: list[RunSpec], size: int = 1) -> list[Job]:
 
 def train_command(job: RunSpec | Job, python: str = sys.executable) -> list[str]:
     """The ``lili train`` command of ``job`` (one run, or runs of one cell trained together
-    with ``--seeds``); ``--resume`` when its folders hold started runs.
+    with ``--seeds``), with ``--backend jax`` for runs of the JAX-native path; ``--resume``
+    when its folders hold started runs.
 
     The folders are looked at now, not when the runs were planned, so that a retried Ray task
     resumes from the checkpoint its killed attempt left.
@@ -123,6 +124,8 @@ def train_command(job: RunSpec | Job, python: str = sys.executable) -> list[str]
         cmd += ["--config", str(_config_path(spec))]
     for key, value in spec.env_kwargs.items():
         cmd += ["--env-kwarg", f"{key}={value}"]
+    if spec.backend != "gym":
+        cmd += ["--backend", spec.backend]
     if run_status(spec) == "resume":
         cmd.append("--resume")
     return cmd

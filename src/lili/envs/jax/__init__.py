@@ -21,6 +21,8 @@ API (:mod:`.core`): ``env.params(**kwargs)`` takes the Gymnasium env's keyword a
 state, reward, done, info)``, the partner updating inside the last step of an interaction;
 ``env.next_interaction(key, state, params) -> (obs, state)``; ``env.info(state, params)``.
 :func:`make` builds an env and its params from a Gymnasium id or alias and its kwargs.
+:mod:`.wrappers` has what the Oracles observe of any of them (:class:`StrategyObservation`,
+:class:`LastInteractionObservation`).
 """
 
 from __future__ import annotations
@@ -36,10 +38,12 @@ from lili.envs.jax.flee import InfluenceFlee
 from lili.envs.jax.point_mass import PointMass
 from lili.envs.jax.rollout import Transition, UniformPolicy, interaction, rollout, rollout_many
 from lili.envs.jax.switch import InfluenceSwitch
+from lili.envs.jax.wrappers import LastInteractionObservation, StrategyObservation
 
 __all__ = ["JAX_ENVS", "Driving2D", "EnvState", "JaxRepeatedEnv", "InfluenceDrift",
-           "InfluenceFlee", "InfluenceSwitch", "PointMass", "Transition", "UniformPolicy",
-           "interaction", "make", "rollout", "rollout_many", "stack"]
+           "InfluenceFlee", "InfluenceSwitch", "LastInteractionObservation", "PointMass",
+           "StrategyObservation", "Transition", "UniformPolicy", "interaction", "make", "rollout",
+           "rollout_many", "stack"]
 
 # Gymnasium id -> the JAX env that follows it.
 JAX_ENVS: dict[str, type[JaxRepeatedEnv]] = {

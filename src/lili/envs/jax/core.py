@@ -29,7 +29,7 @@ changes nothing: reward 0, ``done`` True, ``active``, ``terminated`` and ``trunc
 The Oracle's observation (:class:`lili.envs.OracleObservation`) is ``obs`` with the strategy
 of the interaction appended: for a step's next observation that is the step's
 ``info["strategy"]``, not ``info(state)`` of the returned state, which after the last step
-already holds the next strategy.
+already holds the next strategy (:class:`lili.envs.jax.wrappers.StrategyObservation`).
 
 The partner's randomness is isolated in *draws*: ``reset`` is ``reset_with(reset_draws(key,
 params), params)`` and ``step`` is ``step_with(update_draws(key, params), state, action,
