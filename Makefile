@@ -25,9 +25,10 @@ dev: $(VENV)/.dev
 run: venv
 	$(BIN)/lili reproduce quickstart --out runs
 
-# Two pytest workers (pytest-xdist), one test file each at a time: a file's module fixtures are
-# made once, and the two cores of the CI machine both work.
-PYTEST_PAR := -n 2 --dist loadfile
+# Two pytest workers (pytest-xdist), each running a whole test file (or test class) at a time,
+# so a file's module fixtures are made once and the two cores of the CI machine both work; the
+# files in the order tests/conftest.py gives them (the longest first), not xdist's own.
+PYTEST_PAR := -n 2 --dist loadscope --no-loadscope-reorder
 
 test: dev
 	$(BIN)/ruff check src tests benchmarks

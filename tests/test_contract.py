@@ -1,9 +1,11 @@
-"""The contract every agent keeps, parametrised over every algo (as Stable-Baselines3's tests
+"""The contract every agent keeps, one test class per algo (as Stable-Baselines3's tests
 run one list of models through the same checks): save/load round trip, same seed same numbers
 and resume equivalence, another seed other numbers, action bounds, predict shapes, a bad
 observation, and a run folder that the report reader reads back."""
 
 from __future__ import annotations
+
+from typing import ClassVar
 
 import numpy as np
 import pytest
@@ -99,50 +101,96 @@ def _numbers(rows):
     return [[r.get(k, np.nan) for k in keys] for r in rows]
 
 
-@pytest.fixture(scope="module")
-def runs(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("contract")
-    return {algo: _run(algo, tmp) for algo in ALGOS}, tmp
+@pytest.fixture(scope="class")
+def run(request, tmp_path_factory):
+    """The class's algo trained for ``N`` interactions: (agent, rows, run folder)."""
+    algo = request.cls.algo
+    return _run(algo, tmp_path_factory.mktemp(f"contract_{algo}"))
 
 
-@pytest.mark.parametrize("algo", ALGOS)
-def test_save_load_round_trip(algo, runs, tmp_path):
-    agent = runs[0][algo][0]
-    path = agent.save(tmp_path / "agent.msgpack")
-    loaded = load_agent(path, Asymmetric())
-    assert type(loaded) is type(agent) and loaded.algo == agent.algo
-    assert loaded.config == agent.config and loaded.num_interactions == N
-    import jax
+class Contract:
+    """The checks, for one algo (``algo``); each algo's class is made below.
 
-    same = jax.tree_util.tree_map(lambda a, b: bool(np.array_equal(a, b)), agent.state,
-                                  loaded.state)
-    assert all(jax.tree_util.tree_leaves(same))
-    obs = np.linspace(0.3, -0.2, agent.obs_dim).astype(np.float32)  # the Oracle's is longer
-    state = agent.next_state(agent.stream.buffer)
-    a1, _ = agent.predict(obs, state)
-    a2, _ = loaded.predict(obs, state)
-    np.testing.assert_array_equal(a1, a2)
+    One class per algo, not one module fixture training every algo: pytest-xdist's ``--dist
+    loadscope`` (``make test``) runs each class whole on one worker, so the algos' runs (mostly
+    compiling) spread over both workers instead of queueing on one.
+    """
 
+    algo: ClassVar[str]
 
-@pytest.mark.parametrize("algo", ALGOS)
-def test_other_seed_other_numbers(algo, runs, tmp_path):
-    """(The same seed giving the same numbers: the resume test below, whose fresh agents of
-    the same seed reproduce every number of the run.)"""
-    base = _numbers(runs[0][algo][1])
-    other = _numbers(_run(algo, tmp_path, seed=1)[1])
-    assert not np.array_equal(np.asarray(base)[:, 0], np.asarray(other)[:, 0])
+    def test_save_load_round_trip(self, run, tmp_path):
+        agent = run[0]
+        path = agent.save(tmp_path / "agent.msgpack")
+        loaded = load_agent(path, Asymmetric())
+        assert type(loaded) is type(agent) and loaded.algo == agent.algo
+        assert loaded.config == agent.config and loaded.num_interactions == N
+        import jax
 
+        same = jax.tree_util.tree_map(lambda a, b: bool(np.array_equal(a, b)), agent.state,
+                                      loaded.state)
+        assert all(jax.tree_util.tree_leaves(same))
+        obs = np.linspace(0.3, -0.2, agent.obs_dim).astype(np.float32)  # the Oracle's is longer
+        state = agent.next_state(agent.stream.buffer)
+        a1, _ = agent.predict(obs, state)
+        a2, _ = loaded.predict(obs, state)
+        np.testing.assert_array_equal(a1, a2)
 
-@pytest.mark.parametrize("algo", ALGOS)
-def test_resume_gives_the_numbers_of_an_uninterrupted_run(algo, runs, tmp_path):
-    """A fresh agent of the same seed plays the first interactions, another resumes from its
-    checkpoint: every number equals the uninterrupted run's (so the same seed gives the same
-    numbers, and resuming changes none)."""
-    _, rows, folder = _run(algo, tmp_path, stop_at=3)
-    np.testing.assert_array_equal(np.asarray(_numbers(rows)),
-                                  np.asarray(_numbers(runs[0][algo][1])))
-    # The folder holds every row once, in order (the killed run's row 3 was cut back).
-    assert load_run_like(folder)["interaction"].tolist() == list(range(N))
+    def test_other_seed_other_numbers(self, run, tmp_path):
+        """(The same seed giving the same numbers: the resume test below, whose fresh agents of
+        the same seed reproduce every number of the run.)"""
+        base = _numbers(run[1])
+        other = _numbers(_run(self.algo, tmp_path, seed=1)[1])
+        assert not np.array_equal(np.asarray(base)[:, 0], np.asarray(other)[:, 0])
+
+    def test_resume_gives_the_numbers_of_an_uninterrupted_run(self, run, tmp_path):
+        """A fresh agent of the same seed plays the first interactions, another resumes from its
+        checkpoint: every number equals the uninterrupted run's (so the same seed gives the same
+        numbers, and resuming changes none)."""
+        _, rows, folder = _run(self.algo, tmp_path, stop_at=3)
+        np.testing.assert_array_equal(np.asarray(_numbers(rows)), np.asarray(_numbers(run[1])))
+        # The folder holds every row once, in order (the killed run's row 3 was cut back).
+        assert load_run_like(folder)["interaction"].tolist() == list(range(N))
+
+    def test_actions_stay_in_the_env_bounds_and_shapes_hold(self, run):
+        agent = run[0]
+        env = Asymmetric()
+        rng = np.random.default_rng(0)
+        state = agent.initial_state()
+        assert isinstance(state, ActingState) and np.asarray(state.z).shape == (agent.latent_dim,)
+        if self.algo != "lilac":  # z^1 = 0; LILAC starts from its prior's mean (test_lilac.py)
+            assert not np.asarray(state.z).any()
+        for t in range(env.horizon):
+            action, state = agent.predict(rng.normal(0, 3, agent.obs_dim).astype(np.float32),
+                                          state, deterministic=False)
+            assert action.shape == (2,) and action.dtype == np.float32
+            assert env.action_space.contains(action), action
+            assert int(state.t) == t + 1
+        state = agent.next_state(agent.stream.buffer)
+        assert np.asarray(state.z).shape == (agent.latent_dim,) and int(state.t) == 0
+
+    def test_a_bad_observation_shape_is_one_clear_error(self, run):
+        agent = run[0]
+        d = agent.obs_dim
+        with pytest.raises(ValueError,
+                           match=rf"observation has shape \({d + 1},\); expected \({d},\)"):
+            agent.predict(np.zeros(d + 1, np.float32))
+        with pytest.raises(ValueError, match="state=.* is invalid for .*allowed: None or the "
+                                             "ActingState"):
+            agent.predict(np.zeros(d, np.float32), state=(0, 1))
+
+    def test_the_report_reader_reads_back_what_the_run_logger_wrote(self, run):
+        agent, rows, folder = run
+        (folder / "config.yaml").write_text(
+            f"env: contract/Asymmetric-v0\nenv_kwargs: {{}}\nalgo: {self.algo}\nseed: 0\n"
+            f"interactions: {N}\nagent: {{}}\n")
+        loaded = load_run(folder)
+        np.testing.assert_allclose(loaded.metrics["return"], [r["return"] for r in rows],
+                                   rtol=1e-5)
+        assert loaded.metrics["interaction"].tolist() == list(range(N))
+        assert list(loaded.metrics)[: len(metric_columns(1))] == metric_columns(1)
+        if "critic_loss" in rows[-1]:
+            np.testing.assert_allclose(loaded.metrics["critic_loss"][-1],
+                                       rows[-1]["critic_loss"], rtol=1e-5)
 
 
 def load_run_like(folder):
@@ -153,46 +201,7 @@ def load_run_like(folder):
     return {"interaction": np.array([int(r["interaction"]) for r in rows])}
 
 
-@pytest.mark.parametrize("algo", ALGOS)
-def test_actions_stay_in_the_env_bounds_and_shapes_hold(algo, runs):
-    agent = runs[0][algo][0]
-    env = Asymmetric()
-    rng = np.random.default_rng(0)
-    state = agent.initial_state()
-    assert isinstance(state, ActingState) and np.asarray(state.z).shape == (agent.latent_dim,)
-    if algo != "lilac":  # z^1 = 0; LILAC starts from its prior's mean (tests/test_lilac.py)
-        assert not np.asarray(state.z).any()
-    for t in range(env.horizon):
-        action, state = agent.predict(rng.normal(0, 3, agent.obs_dim).astype(np.float32),
-                                      state, deterministic=False)
-        assert action.shape == (2,) and action.dtype == np.float32
-        assert env.action_space.contains(action), action
-        assert int(state.t) == t + 1
-    state = agent.next_state(agent.stream.buffer)
-    assert np.asarray(state.z).shape == (agent.latent_dim,) and int(state.t) == 0
-
-
-@pytest.mark.parametrize("algo", ALGOS)
-def test_a_bad_observation_shape_is_one_clear_error(algo, runs):
-    agent = runs[0][algo][0]
-    d = agent.obs_dim
-    with pytest.raises(ValueError, match=rf"observation has shape \({d + 1},\); expected \({d},\)"):
-        agent.predict(np.zeros(d + 1, np.float32))
-    with pytest.raises(ValueError, match="state=.* is invalid for .*allowed: None or the "
-                                         "ActingState"):
-        agent.predict(np.zeros(d, np.float32), state=(0, 1))
-
-
-@pytest.mark.parametrize("algo", ALGOS)
-def test_the_report_reader_reads_back_what_the_run_logger_wrote(algo, runs):
-    agent, rows, folder = runs[0][algo]
-    (folder / "config.yaml").write_text(
-        f"env: contract/Asymmetric-v0\nenv_kwargs: {{}}\nalgo: {algo}\nseed: 0\n"
-        f"interactions: {N}\nagent: {{}}\n")
-    run = load_run(folder)
-    np.testing.assert_allclose(run.metrics["return"], [r["return"] for r in rows], rtol=1e-5)
-    assert run.metrics["interaction"].tolist() == list(range(N))
-    assert list(run.metrics)[: len(metric_columns(1))] == metric_columns(1)
-    if "critic_loss" in rows[-1]:
-        np.testing.assert_allclose(run.metrics["critic_loss"][-1], rows[-1]["critic_loss"],
-                                   rtol=1e-5)
+# One test class per algo of the registry (a new algo gets its class without an edit here).
+for _algo in ALGOS:
+    _name = "Test_" + _algo.replace("-", "_")
+    globals()[_name] = type(_name, (Contract,), {"algo": _algo, "__module__": __name__})

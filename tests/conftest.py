@@ -1,0 +1,80 @@
+"""Suite-wide settings: one JAX compilation cache for the whole run, and the longest files first.
+
+Most of the suite's time is XLA compiling the agents' update programs, and the same program is
+compiled again in every process that runs it: both pytest-xdist workers and each ``lili``
+subprocess a test starts (``lili train``, ``lili reproduce`` and its runs, Ray's workers). A
+persistent compilation cache in one temporary folder, made for this run and removed after it,
+lets each program compile once per run: a process that meets it again loads the executable
+XLA wrote (the same code, so the same numbers), and a test that checks numbers still checks
+them. A cache that is already set (``JAX_COMPILATION_CACHE_DIR``) is left as it is.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import shutil
+import tempfile
+from collections import Counter
+
+import pytest
+
+# Files whose time is a few long tests or a long fixture but that hold few tests, so that
+# pytest-xdist's own order (most tests first) would start them last and one worker would run
+# them alone at the end. They start first; the rest follow with the most tests first (xdist's
+# rule), one test class of tests/test_contract.py (one algo) being one unit. ``make test``
+# runs ``-n 2 --dist loadscope --no-loadscope-reorder`` to keep this order. From the
+# --durations of 2026-12-04.
+LONGEST_FIRST = (
+    "test_reproduce.py",
+    "test_many.py",
+    "test_slac.py",
+    "test_ray.py",
+    "test_jax_train.py",
+    "test_lilac.py",
+    "test_multiseed.py",
+)
+
+_CACHE_OWNER = "LILI_TESTS_JAX_CACHE"  # set when this run made the folder (and removes it)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if hasattr(config, "workerinput") or os.environ.get("JAX_COMPILATION_CACHE_DIR"):
+        return  # an xdist worker inherits the controller's folder through the environment
+    folder = tempfile.mkdtemp(prefix="lili-tests-jax-cache-")
+    settings = {
+        "JAX_COMPILATION_CACHE_DIR": folder,
+        # Every compile is cached: the agents' programs are many short compiles, not a few long.
+        "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS": "0",
+    }
+    if importlib.util.find_spec("filelock"):
+        # A size limit makes JAX lock the folder around each read and write, so that a process
+        # never reads an entry another is still writing (without the lock JAX warns and
+        # compiles anew; with it no read is torn).
+        settings["JAX_COMPILATION_CACHE_MAX_SIZE"] = str(8 << 30)
+    settings[_CACHE_OWNER] = folder
+    # Set before any JAX import (the test modules import it later; workers and subprocesses read
+    # it from the environment they inherit).
+    os.environ.update(settings)
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    if hasattr(config, "workerinput"):
+        return
+    folder = os.environ.pop(_CACHE_OWNER, None)
+    if folder:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    def unit(item: pytest.Item) -> str:  # what --dist loadscope keeps on one worker
+        return item.nodeid.rsplit("::", 1)[0]
+
+    size = Counter(unit(item) for item in items)
+
+    def rank(item: pytest.Item) -> tuple[int, int]:
+        name = item.path.name
+        first = LONGEST_FIRST.index(name) if name in LONGEST_FIRST else len(LONGEST_FIRST)
+        return first, -size[unit(item)]
+
+    items.sort(key=rank)  # stable: a unit's tests keep their order
