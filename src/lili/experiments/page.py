@@ -324,22 +324,9 @@ def results_markdown(sources: str | Path = DEFAULT_SOURCES,
 
 def quickstart_table(sources: str | Path = DEFAULT_SOURCES) -> str:
     """The README's quick-start table: ``make run``'s algos (the ``quickstart`` preset) from
-    the records ``sources`` names, IQM over seeds with its 95% interval."""
+    the records ``sources`` names, as the results page tables an env (:func:`_env_table`)."""
     part = PRESETS["quickstart"]
-    evidence = load_evidence(part, load_sources(sources))
-    group = part.groups[0]
-    runs = [r for algo in group.algos for r in evidence.get((group.folder, algo), [])]
-    if not runs:
-        return "No committed records.\n"
-    lines = ["| algo | final return IQM [95% CI] | success IQM [95% CI] | seeds | interactions "
-             "| paper |", "|---|---:|---:|---:|---:|---|"]
-    for row in summarize(runs):
-        mine = evidence[(group.folder, row["algo"])]
-        ci, sci = row["return_iqm_ci"] or (None, None), row["success_iqm_ci"] or (None, None)
-        lines.append(f"| {algo_label(row['algo'])} | {fmt_interval(row['return_iqm'], *ci)} | "
-                     f"{fmt_interval(row['success_iqm'], *sci, pct=True)} | {row['n']} | "
-                     f"{_interactions(mine)} | {_paper_cell(row)} |")
-    return "\n".join(lines) + "\n"
+    return _env_table(part, load_evidence(part, load_sources(sources)))[0]
 
 
 def with_quickstart_table(readme: str, table: str) -> str:
