@@ -41,9 +41,8 @@ from lili.envs.influence import HELD, SUITE, make_scripted, play
 from lili.experiments import reproduce
 from lili.experiments.presets import INFLUENCE_ENVS, get_preset
 from lili.report import find_runs
-from lili.report.stats import final_performance, mean_se
+from lili.report.stats import final_performance, gap_share, held_share, mean_se
 from lili.report.style import algo_label
-from lili.runs import final_window
 
 ROOT = Path(__file__).resolve().parent.parent
 # Point Mass's greedy target takes a slow random walk round the circle, and Drift's partner
@@ -70,8 +69,7 @@ def _score(runs: list, env_id: str) -> dict:
     """Final return and held share per seed of ``runs`` (one algo on one env)."""
     runs = sorted(runs, key=lambda r: r.seed)
     finals = [final_performance(r) for r in runs]
-    held = [float(np.isin(r.metrics["strategy_id"][-final_window(r.n_interactions):],
-                          HELD[env_id]).mean()) for r in runs]
+    held = [held_share(r, HELD[env_id]) for r in runs]
     mean, se = mean_se(finals)
     return {"mean": mean, "se": se, "per_seed": finals, "held": float(np.mean(held)),
             "held_per_seed": held,
@@ -111,7 +109,8 @@ def table(env_id: str, scripted: dict, learned: dict) -> list[str]:
         lines.append(f"| scripted: {name.replace('-', ' ')} | {row['mean']:.3f} | {known} "
                      "| | | |")
     for algo, row in learned.items():
-        gap = "" if sac is None or top == sac else f"{(row['mean'] - sac) / (top - sac):.2f}"
+        share = gap_share(row["mean"], sac, top)
+        gap = "" if share is None else f"{share:.2f}"
         versus = ""
         if base is not None and "no-influence" not in algo and "no influence" not in algo \
                 and algo != "sac":

@@ -7,10 +7,12 @@
   calls training); :mod:`~lili.experiments.local` and :mod:`~lili.experiments.ray_backend`
   execute it.
 - :mod:`~lili.experiments.results`: the preset's report (through :mod:`lili.report`).
-- :mod:`~lili.experiments.claims`: the paper's claims per preset, checked PASS / FAIL / too
-  few seeds (``lili reproduce NAME --check-only``).
+- :mod:`~lili.experiments.claims`: the paper's claims per preset (and the influence suite's
+  goals), checked PASS / FAIL / too few seeds (``lili reproduce NAME --check-only``).
 - :mod:`~lili.experiments.page`: ``lili results``, the results page ``docs/results.md`` from
-  the committed records.
+  the committed records; its influence-suite section is
+  :mod:`~lili.experiments.influence_page`, and :mod:`~lili.experiments.provenance` words
+  where a section's runs come from (settings, sources, ``lili reproduce`` commands).
 """
 
 from lili.experiments.plan import RunSpec, plan, run_status

@@ -13,6 +13,11 @@ run's last 200 interactions. The decision rules (also in ``docs/reproduce.md``):
   neither is shown to beat the other.
 - ``metric >= t`` / ``<= t`` / ``t ± d`` PASS when the IQM over seeds is at least t / at most
   t / within d of t (the paper's qualitative words, "near 100%", "about 50%", read as a band).
+- ``A closes >= t of the gap from B to C`` PASSes when the IQM over A's seeds of
+  (A - IQM(B)) / (IQM(C) - IQM(B)) is at least t (the IQM commutes with that map, so this is
+  A's IQM placed between B's and C's; the interval is over A's seeds, B and C held at theirs).
+- A claim that ``requires`` another (a goal that applies only where a condition holds) is
+  "not applicable" where that other claim does not PASS, its numbers shown all the same.
 - A claim whose runs have fewer seeds than its ``min_seeds`` (3, the paper's, unless the claim
   needs more to be decisive) is "too few seeds", never PASS or FAIL.
 
@@ -40,6 +45,7 @@ import yaml
 from lili.experiments.presets import (
     HISTORY,
     HISTORY_BOUNDED,
+    INFLUENCE_ENVS,
     NOISE,
     NOISE_BOUNDED,
     PRESETS,
@@ -51,6 +57,7 @@ from lili.report.paper import PAPER, PAPER_TABLES
 from lili.report.stats import (
     STRATEGY_WINDOW,
     final_performance,
+    gap_share,
     iqm_ci,
     probability_of_improvement_ci,
 )
@@ -59,10 +66,10 @@ from lili.report.tables import fmt_interval
 
 __all__ = ["Source", "Side", "Claim", "ClaimResult", "CLAIMS", "claims_for", "check_claims",
            "claims_markdown", "out_layout", "load_sources", "load_evidence", "Evidence",
-           "VERDICTS", "metric_values"]
+           "VERDICTS", "metric_values", "influence_goals", "GOAL_ORACLE_MARGIN", "GOAL_GAP"]
 
-VERDICTS = ("PASS", "FAIL", "too few seeds")
-RULES = ("greater", "level", "at_least", "at_most", "near")
+VERDICTS = ("PASS", "FAIL", "too few seeds", "not applicable")
+RULES = ("greater", "level", "at_least", "at_most", "near", "gap")
 Evidence = dict[tuple[str, str], list[Run]]
 """(group folder, algo) -> its finished runs, sorted by seed."""
 
@@ -94,8 +101,11 @@ class Claim:
 
     ``metric``: ``return``, ``success`` or ``strategy:K`` (the share of the partner's strategy
     K over a run's last 200 interactions). ``rule``: one of :data:`RULES`; ``a`` and ``b`` the
-    sides compared (``b`` only for ``greater`` and ``level``), ``target`` and ``tolerance``
-    the threshold or band. ``paper``: the paper's number or words, with where it says so.
+    sides compared (``b`` only for ``greater``, ``level`` and ``gap``; ``top`` only for
+    ``gap``, the end of the gap from ``b``), ``target`` and ``tolerance`` the threshold or
+    band. ``paper``: the paper's number or words, with where it says so (or whose goal it
+    is). ``env``: the env whose runs the claim reads, for a preset that runs several envs in
+    one folder (``influence``); ``requires``: a claim that must PASS for this one to apply.
     """
 
     statement: str
@@ -107,15 +117,21 @@ class Claim:
     tolerance: float | None = None
     paper: str = ""
     min_seeds: int = 3
+    top: Side | None = None
+    env: str | None = None
+    requires: Claim | None = None
 
     def __post_init__(self) -> None:
         if self.rule not in RULES:
             raise ValueError(f"claim {self.statement!r}: rule {self.rule!r} is invalid; "
                              f"allowed: {', '.join(RULES)}")
-        if (self.b is None) != (self.rule not in ("greater", "level")):
+        if (self.b is None) != (self.rule not in ("greater", "level", "gap")):
             raise ValueError(f"claim {self.statement!r}: a second side is needed by exactly "
-                             "the rules greater and level")
-        if self.rule in ("at_least", "at_most", "near") and self.target is None:
+                             "the rules greater, level and gap")
+        if (self.top is None) != (self.rule != "gap"):
+            raise ValueError(f"claim {self.statement!r}: the end of a gap (top) is needed by "
+                             "exactly the rule gap")
+        if self.rule in ("at_least", "at_most", "near", "gap") and self.target is None:
             raise ValueError(f"claim {self.statement!r}: rule {self.rule} needs a target")
 
     @property
@@ -314,6 +330,32 @@ def _air_hockey() -> tuple[Claim, ...]:
     )
 
 
+GOAL_ORACLE_MARGIN = 0.1
+"""Issue 36: the Oracle "reaches" the scripted influencer when its return is within this."""
+GOAL_GAP = 0.8
+"""Issue 36: LILI's share of the gap from SAC to the Oracle, where the Oracle reaches the
+influencer."""
+
+
+def influence_goals(env: str) -> tuple[Claim, Claim]:
+    """Issue 36's goals on an influence-suite env, as claims on that env's runs: the Oracle
+    reaches the scripted influencer (its derived return, :data:`lili.envs.influence.SUITE`)
+    within :data:`GOAL_ORACLE_MARGIN`, and, where it does, LILI closes at least
+    :data:`GOAL_GAP` of the gap from SAC to the Oracle."""
+    from lili.envs.influence import SUITE
+
+    top = SUITE[env][1]["influencer"]
+    where = "issue 36's goal (not the paper's)"
+    reach = Claim(f"{env}: Oracle within {GOAL_ORACLE_MARGIN:g} of the scripted influencer "
+                  f"({top:.3f})", "return", "at_least", Side("oracle"),
+                  target=top - GOAL_ORACLE_MARGIN, paper=where, env=env)
+    share = Claim(f"{env}: LILI closes >= {GOAL_GAP:g} of the SAC-to-Oracle gap", "return",
+                  "gap", Side("lili"), Side("sac"), top=Side("oracle"), target=GOAL_GAP,
+                  paper=f"{where}, where the Oracle reaches the influencer", env=env,
+                  requires=reach)
+    return reach, share
+
+
 CLAIMS: dict[str, tuple[Claim, ...]] = {
     "point-mass": _point_mass(),
     "noise": _noise(),
@@ -322,14 +364,18 @@ CLAIMS: dict[str, tuple[Claim, ...]] = {
     "driving-steer": _driving_steer(),
     "lunar-lander": _lunar_lander(),
     "air-hockey": _air_hockey(),
+    "influence": tuple(c for env in INFLUENCE_ENVS for c in influence_goals(env)),
 }
-"""The claims of each preset of the paper, by preset name (``paper`` is its parts')."""
+"""The claims of each preset of the paper, by preset name (``paper`` is its parts'), and the
+goals of the ``influence`` preset (issue 36; not the paper's)."""
 
 
 def claims_for(preset: Preset) -> list[tuple[Preset, Claim]]:
-    """Every claim of ``preset`` (of each part for ``paper``), with the part it belongs to."""
+    """Every claim of ``preset`` (of each part for ``paper``), with the part it belongs to
+    (for a claim on one ``env``, the part's groups on that env: :meth:`Preset.for_env`)."""
     parts = [PRESETS[n] for n in preset.includes] or [preset]
-    return [(part, claim) for part in parts for claim in CLAIMS.get(part.name, ())]
+    return [(part.for_env(claim.env) if claim.env is not None else part, claim)
+            for part in parts for claim in CLAIMS.get(part.name, ())]
 
 
 # ----------------------------------------------------------------------------------------
@@ -419,6 +465,14 @@ def load_evidence(preset: Preset, locate: Locate) -> Evidence:
     pointing at the wrong folder); other values of it and other agent settings are the
     departures a report names (``--env-kwarg``, ``--set``)."""
     parts = [PRESETS[n] for n in preset.includes] or [preset]
+    envs: dict[str, set[str]] = {}
+    for group in (g for part in parts for g in part.groups):
+        envs.setdefault(group.folder, set()).add(group.env)
+    for folder, found in envs.items():
+        if len(found) > 1:  # evidence is keyed by (folder, algo): the envs would mix
+            raise ValueError(f"preset {preset.name!r}: folder {folder!r} holds runs of "
+                             f"{len(found)} envs ({', '.join(sorted(found))}); allowed: one "
+                             "env at a time (Preset.for_env)")
     evidence: Evidence = {}
     seen: dict[tuple[str, str, int], Path] = {}
     loaded: dict[Path, list[Run]] = {}
@@ -483,7 +537,7 @@ def _fmt(stats: tuple[float, float | None, float | None], pct: bool) -> str:
 
 def check_claim(part: Preset, claim: Claim, evidence: Evidence) -> ClaimResult:
     """One claim of ``part`` against the runs in ``evidence`` (rules: the module doc)."""
-    sides = [claim.a] + ([claim.b] if claim.b is not None else [])
+    sides = [s for s in (claim.a, claim.b, claim.top) if s is not None]
     values = [metric_values(evidence.get((_side_folder(part, s), s.algo), []), claim.metric)
               for s in sides]
     seeds = tuple(len(v) for v in values)
@@ -495,7 +549,10 @@ def check_claim(part: Preset, claim: Claim, evidence: Evidence) -> ClaimResult:
     need = f"; needs {claim.min_seeds}" if few else ""
     stats: dict[str, Any] = {"a": iqm_ci(values[0])}
     point = stats["a"][0]
-    if claim.b is None:
+    if claim.rule == "gap":
+        ok, ours = _gap(claim, values, stats)
+        ours += f" ({' vs '.join(str(n) for n in seeds)} seeds{need})"
+    elif claim.b is None:
         ok = {"at_least": point >= claim.target, "at_most": point <= claim.target,
               "near": abs(point - claim.target) <= (claim.tolerance or 0.0)}[claim.rule]
         ours = f"{_fmt(stats['a'], claim.pct)} ({seeds[0]} seeds{need})"
@@ -511,21 +568,51 @@ def check_claim(part: Preset, claim: Claim, evidence: Evidence) -> ClaimResult:
             ok = low <= 0.5 <= high
         ours = (f"{_fmt(stats['a'], claim.pct)} vs {_fmt(stats['b'], claim.pct)}; "
                 f"P(>) {fmt_interval(*stats['p'])} ({seeds[0]} vs {seeds[1]} seeds{need})")
+    if claim.requires is not None:
+        condition = check_claim(part, claim.requires, evidence)
+        if condition.verdict != "PASS":
+            return ClaimResult(claim, "not applicable", f"{ours}; its condition, "
+                               f"\"{claim.requires.statement}\": {condition.verdict}",
+                               seeds, stats)
     if few:
         return ClaimResult(claim, "too few seeds", ours, seeds, stats)
     return ClaimResult(claim, "PASS" if ok else "FAIL", ours, seeds, stats)
 
 
+def _gap(claim: Claim, values: list[list[float]], stats: dict[str, Any]) -> tuple[bool, str]:
+    """The rule ``gap``: A's seeds as shares of the gap from B's IQM to C's (``stats`` gets
+    ``b``, ``top`` and the shares' ``gap``); whether their IQM reaches the target, and ours."""
+    stats["b"], stats["top"] = iqm_ci(values[1]), iqm_ci(values[2])
+    start, end = stats["b"][0], stats["top"][0]
+    shares = [gap_share(v, start, end) for v in values[0]]
+    if any(s is None for s in shares):  # B and C tie: there is no gap to close
+        return False, (f"no gap: {_fmt(stats['b'], claim.pct)} vs "
+                       f"{_fmt(stats['top'], claim.pct)}")
+    stats["gap"] = iqm_ci(shares)
+    return stats["gap"][0] >= claim.target, (
+        f"{fmt_interval(*stats['gap'])} of the gap: {_fmt(stats['a'], claim.pct)} between "
+        f"{_fmt(stats['b'], claim.pct)} and {_fmt(stats['top'], claim.pct)}")
+
+
 def check_claims(preset: Preset, locate: Locate) -> list[tuple[Preset, ClaimResult]]:
-    """Every claim of ``preset`` checked against the runs ``locate`` finds."""
-    evidence = load_evidence(preset, locate)
-    return [(part, check_claim(part, claim, evidence)) for part, claim in claims_for(preset)]
+    """Every claim of ``preset`` checked against the runs ``locate`` finds (a claim on one env
+    against that env's runs alone)."""
+    loaded: dict[str | None, Evidence] = {}
+    results = []
+    for part, claim in claims_for(preset):
+        if claim.env not in loaded:
+            loaded[claim.env] = load_evidence(preset if claim.env is None else part, locate)
+        results.append((part, check_claim(part, claim, loaded[claim.env])))
+    return results
 
 
 RULE_NOTE = ("A > B: PASS when A's IQM is above B's and the 95% interval of P(A > B) lies above "
              "0.5; A ≈ B: PASS when that interval contains 0.5; a threshold or band: PASS when "
              "the IQM meets it; too few seeds: fewer than the claim needs. IQM over seeds "
-             "[percentile bootstrap 95% CI]; P(>) = P(A > B) over seed pairs, ties 1/2.")
+             "[percentile bootstrap 95% CI]; P(>) = P(A > B) over seed pairs, ties 1/2. "
+             "A closes >= t of the gap from B to C: PASS when the IQM of A's seeds placed "
+             "between B's and C's IQMs, (A - B) / (C - B), is at least t; not applicable: a "
+             "goal whose condition (another claim) does not PASS.")
 
 
 def claims_markdown(results: Sequence[tuple[Preset, ClaimResult]],
@@ -539,7 +626,9 @@ def claims_markdown(results: Sequence[tuple[Preset, ClaimResult]],
         lines.append("| " + (f"{part.name} | " if with_part else "")
                      + f"{r.claim.statement} | {r.ours} | {r.paper} | {verdict} |")
     counts = {v: sum(r.verdict == v for _, r in results) for v in VERDICTS}
+    moot = f", {counts['not applicable']} not applicable" if counts["not applicable"] else ""
     lines += ["", f"{counts['PASS']} PASS, {counts['FAIL']} FAIL, {counts['too few seeds']} "
-              f"too few seeds, of {len(results)} claims." + (f" {RULE_NOTE}" if rules else "")]
+              f"too few seeds{moot}, of {len(results)} claims."
+              + (f" {RULE_NOTE}" if rules else "")]
     return "\n".join(lines) + "\n"
 

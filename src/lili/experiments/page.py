@@ -4,20 +4,19 @@ only (every number on it is computed from ``metrics.csv`` files; none is typed b
 Per paper item (the parts of the ``paper`` preset): a table of ours beside the paper's, one
 figure (``docs/results/<preset>.png``), the claim checks (:mod:`lili.experiments.claims`),
 which records are the evidence and why (the sources file), and the ``lili reproduce`` commands
-that retrain those runs. Regenerating it from the same records gives the same file, byte for
-byte (``tests/test_results_page.py``).
+that retrain those runs. Then the influence suite (:mod:`lili.experiments.influence_page`):
+per suite env, the scripted optima beside the learned agents, with gap and held shares and
+issue 36's goals. Regenerating it from the same records gives the same file, byte for byte
+(``tests/test_results_page.py``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from lili.agents.registry import config_for
-from lili.config import AgentConfig, stored_agent_config
 from lili.experiments.claims import (
     RULE_NOTE,
     VERDICTS,
@@ -29,7 +28,15 @@ from lili.experiments.claims import (
     load_sources,
     metric_values,
 )
-from lili.experiments.presets import PRESETS, Group, Preset
+from lili.experiments.influence_page import influence_section
+from lili.experiments.presets import PRESETS, Preset
+from lili.experiments.provenance import (
+    departures,
+    interactions_text,
+    reproduce_commands,
+    setting,
+    sources_markdown,
+)
 from lili.report.files import Run
 from lili.report.paper import PAPER_TABLES
 from lili.report.stats import iqm_ci, summarize
@@ -48,74 +55,6 @@ QUICKSTART_BEGIN = "<!-- quickstart-table: written by `lili results` from the co
 QUICKSTART_END = "<!-- /quickstart-table -->"
 
 
-def departures(run: Run, group: Group, part: Preset) -> list[str]:
-    """What a run changed from its preset's setting, as ``lili reproduce`` flags would set it:
-    ``interactions=N``, agent fields (``--set``) and env options (``--env-kwarg``)."""
-    out = []
-    if run.budget is not None and run.budget != part.interactions:
-        out.append(f"interactions={run.budget}")
-    stored = stored_agent_config(run.config.get("agent"))
-    if isinstance(stored, dict):
-        want = AgentConfig.from_dict(config_for(run.algo, group.config)).to_dict()
-        out += [f"{k}={stored[k]}" for k in want if k in stored and stored[k] != want[k]
-                and k != "checkpoint_every"]  # when checkpoints are written changes no number
-    kwargs = run.config.get("env_kwargs") or {}
-    out += [f"env {k}={v}" for k, v in sorted(kwargs.items()) if group.env_kwargs.get(k) != v]
-    return out
-
-
-def _setting(runs: Sequence[Run], group: Group, part: Preset) -> str:
-    found = dict.fromkeys(d for r in runs for d in departures(r, group, part))
-    return ", ".join(f"`{d}`" for d in found) or "the preset's"
-
-
-def _seeds(runs: Sequence[Run]) -> int:
-    return max(r.seed for r in runs) + 1
-
-
-def _owner(folder: str, algo: str) -> Preset:
-    """The first preset (in PRESETS order) that runs ``algo`` in ``folder``."""
-    return next(p for p in PRESETS.values() if not p.includes
-                and any(g.folder == folder and algo in g.algos for g in p.groups))
-
-
-def reproduce_commands(part: Preset, evidence: Evidence) -> list[str]:
-    """``lili reproduce`` commands that retrain the runs behind ``part``'s evidence: one per
-    (preset, setting, seeds), the setting read from the runs' config.yaml."""
-    commands: dict[tuple, list[str]] = {}
-    for group in part.groups:
-        for algo in group.algos:
-            runs = evidence.get((group.folder, algo), [])
-            if not runs:
-                continue
-            owner = _owner(group.folder, algo)
-            owner_group = next(g for g in owner.groups if g.folder == group.folder)
-            for run in runs:
-                key = (owner.name, tuple(departures(run, owner_group, owner)), _seeds(runs))
-                commands.setdefault(key, [])
-                if algo not in commands[key]:
-                    commands[key].append(algo)
-    lines = []
-    for (name, changes, seeds), algos in commands.items():
-        owner = PRESETS[name]
-        cmd = [f"lili reproduce {name}"]
-        if set(owner.algos) - set(algos):
-            cmd.append("--algos " + " ".join(algos))
-        if seeds != owner.seeds:
-            cmd.append(f"--seeds {seeds}")
-        for change in changes:
-            if change.startswith("interactions="):
-                cmd.append(f"--interactions {change.split('=', 1)[1]}")
-            elif change.startswith("env "):
-                cmd.append(f"--env-kwarg {change[4:]}")
-            else:
-                cmd.append(f"--set {change}")
-        line = " ".join(cmd)
-        if line not in lines:
-            lines.append(line)
-    return lines
-
-
 def _paper_cell(row: dict[str, Any]) -> str:
     cited = []
     if row.get("paper_return") is not None:
@@ -125,11 +64,6 @@ def _paper_cell(row: dict[str, Any]) -> str:
     elif row.get("paper_text"):
         cited.append(f"success {row['paper_text']}")
     return ", ".join(cited) or "—"
-
-
-def _interactions(runs: Sequence[Run]) -> str:
-    low, high = min(r.n_interactions for r in runs), max(r.n_interactions for r in runs)
-    return f"{low}" if low == high else f"{low}-{high}"
 
 
 def _env_table(part: Preset, evidence: Evidence) -> tuple[str, list[dict[str, Any]]]:
@@ -154,7 +88,7 @@ def _env_table(part: Preset, evidence: Evidence) -> tuple[str, list[dict[str, An
             sci = row["success_iqm_ci"] or (None, None)
             cells += [fmt_interval(row["success_iqm"], *sci, pct=True),
                       fmt_mean_se(row["success_mean"], row["success_se"], pct=True, n=row["n"])]
-        cells += [str(row["n"]), _interactions(mine), _setting(mine, group, part),
+        cells += [str(row["n"]), interactions_text(mine), setting(mine, group, part),
                   _paper_cell(row)]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n", rows
@@ -193,7 +127,7 @@ def _variant_table(part: Preset, evidence: Evidence) -> tuple[str, list[dict[str
             f"| {value} | {algo_label(r['algo'])} "
             f"| {fmt_interval(r['return_iqm'], *(r['return_iqm_ci'] or (None, None)))} "
             f"| {fmt_mean_se(r['return_mean'], r['return_se'], n=r['n'])} | {r['n']} "
-            f"| {_interactions(mine)} | {_setting(mine, group, part)} "
+            f"| {interactions_text(mine)} | {setting(mine, group, part)} "
             f"| {fmt_mean_se(r['paper_mean'], r['paper_se'], '.4g')} |")
     return "\n".join(lines) + "\n", rows
 
@@ -241,21 +175,6 @@ def _plot_env(part: Preset, evidence: Evidence, rows: list[dict[str, Any]], path
     plt.close(fig)
 
 
-def _sources_md(part: Preset, locate) -> str:
-    lines, seen = [], set()
-    for group in part.groups:
-        for source in locate(group):
-            key = (str(source.path), source.algos)
-            if key in seen:
-                continue
-            seen.add(key)
-            algos = ("" if source.algos is None
-                     else " (" + ", ".join(algo_label(a) for a in source.algos) + ")")
-            note = f": {source.note}" if source.note else ""
-            lines.append(f"- `{source.path.as_posix()}`{algos}{note}")
-    return "\n".join(lines) + "\n"
-
-
 def _section(part: Preset, locate, evidence: Evidence, figures: Path | None,
              rel: str) -> tuple[str, list]:
     if part.kind == "table":
@@ -276,7 +195,7 @@ def _section(part: Preset, locate, evidence: Evidence, figures: Path | None,
     text = (f"## {part.title}\n\nPaper: {part.where}. Env: {envs}. Ours: {part.metric}.\n\n"
             f"{table}\n{figure}**Claims**\n\n"
             f"{claims_markdown(results, with_part=False, rules=False)}\n"
-            f"**Evidence** (committed records)\n\n{_sources_md(part, locate)}\n"
+            f"**Evidence** (committed records)\n\n{sources_markdown(part, locate)}\n"
             "**Reproduce** (retrains these runs into `runs/reproduce`; the last command "
             "checks the claims)\n\n```\n" + "\n".join(commands)
             + f"\nlili reproduce {part.name} --check-only\n```\n")
@@ -299,6 +218,7 @@ def results_markdown(sources: str | Path = DEFAULT_SOURCES,
         text, results = _section(part, locate, evidence, fig_dir, rel)
         sections.append(text)
         all_results += results
+    influence, _ = influence_section(locate, evidence)
     counts = {v: sum(r.verdict == v for _, r in all_results) for v in VERDICTS}
     summary = claims_markdown(all_results, rules=False)
     head = (
@@ -319,7 +239,7 @@ def results_markdown(sources: str | Path = DEFAULT_SOURCES,
         "The same table, from the same records, without writing anything: `lili reproduce "
         f"paper --check-only --sources {Path(sources).as_posix()}`.\n\n{summary}\n"
     )
-    return head + "\n".join(sections)
+    return head + "\n".join([*sections, influence])
 
 
 def quickstart_table(sources: str | Path = DEFAULT_SOURCES) -> str:

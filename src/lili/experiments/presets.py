@@ -91,6 +91,16 @@ class Preset:
                        departure_reason="",
                        interactions=self.paper_interactions or self.interactions)
 
+    def for_env(self, env: str) -> Preset:
+        """This preset's groups on ``env`` alone: how a preset that runs several envs in one
+        folder (``influence``) is read, one env at a time. ValueError for an env it does not
+        run."""
+        groups = tuple(g for g in self.groups if g.env == env)
+        if not groups:
+            raise ValueError(f"preset {self.name!r} runs no env {env!r}; allowed: "
+                             f"{', '.join(self.envs)}")
+        return replace(self, groups=groups)
+
     @property
     def algos(self) -> tuple[str, ...]:
         """Every algo any group of this preset runs, in first-seen order."""

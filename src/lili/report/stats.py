@@ -19,7 +19,7 @@ from lili.report.style import algo_sort_key, env_sort_key
 
 __all__ = ["final_performance", "mean_se", "summarize", "group_runs", "moving_average",
            "strategy_frequencies", "success_by_strategy", "strategy_names", "STRATEGY_WINDOW",
-           "gap_closed", "iqm", "iqm_ci", "probability_of_improvement",
+           "gap_closed", "gap_share", "held_share", "iqm", "iqm_ci", "probability_of_improvement",
            "probability_of_improvement_ci", "BOOTSTRAP_RESAMPLES", "BOOTSTRAP_SEED",
            "CONFIDENCE"]
 
@@ -160,14 +160,33 @@ def _iqm_fields(metric: str, values: Sequence[float]) -> dict[str, Any]:
             f"{metric}_iqm_ci": None if low is None else [low, high]}
 
 
+def gap_share(value: float | None, start: float | None, end: float | None) -> float | None:
+    """The share of the gap from ``start`` to ``end`` that ``value`` closes:
+    (value - start) / (end - start); None when any is None or the two ends tie."""
+    if value is None or start is None or end is None or end == start:
+        return None
+    return float((value - start) / (end - start))
+
+
 def gap_closed(returns: dict[str, float], algo: str) -> float | None:
     """(R_algo - R_SAC) / (R_Oracle - R_SAC), or None without both baselines or when they tie."""
-    if algo not in returns or "sac" not in returns or "oracle" not in returns:
+    return gap_share(returns.get(algo), returns.get("sac"), returns.get("oracle"))
+
+
+def held_share(run: Run, held: Sequence[int], frac: float = 0.1) -> float | None:
+    """The share of the run's last ``frac`` of interactions (:func:`lili.runs.final_window`,
+    the window of :func:`final_performance`) in which the partner's strategy id is one of
+    ``held``: the influence suite's behavioural evidence of influence, with ``held`` the ids
+    the scripted influencer holds the partner at (:data:`lili.envs.influence.HELD`). Counted
+    over the interactions that logged an id; None when none in the window did."""
+    from lili.runs import final_window  # as in final_performance: no JAX to read a CSV
+
+    ids = run.metrics.get("strategy_id")
+    if ids is None or run.n_interactions == 0:
         return None
-    denom = returns["oracle"] - returns["sac"]
-    if denom == 0:
-        return None
-    return float((returns[algo] - returns["sac"]) / denom)
+    ids = ids[-final_window(run.n_interactions, frac):]
+    ids = ids[~np.isnan(ids) & (ids >= 0)]
+    return float(np.isin(ids, held).mean()) if ids.size else None
 
 
 def moving_average(values: np.ndarray, window: int) -> np.ndarray:

@@ -30,7 +30,7 @@ from lili.envs.influence.flee import InfluenceFleeEnv
 from lili.envs.influence.scripted import Rollout, ScriptedPolicy, play
 from lili.envs.influence.switch import InfluenceSwitchEnv
 
-__all__ = ["SUITE", "POLICIES", "HELD", "InfluenceDriftEnv", "InfluenceFleeEnv",
+__all__ = ["SUITE", "POLICIES", "HELD", "HELD_WHERE", "InfluenceDriftEnv", "InfluenceFleeEnv",
            "InfluenceSwitchEnv", "Rollout", "ScriptedPolicy", "play"]
 
 POLICIES = ("no-information", "greedy", "influencer")
@@ -52,6 +52,12 @@ HELD: dict[str, tuple[int, ...]] = {
     "lili/InfluenceSwitch-v0": (switch.MIDDLE,),
     "lili/InfluenceFlee-v0": (flee.HOME,),  # g = 0
 }
+HELD_WHERE: dict[str, str] = {
+    "lili/InfluenceDrift-v0": "g = -0.125 or +0.125, next to the start",
+    "lili/InfluenceSwitch-v0": "the middle mode",
+    "lili/InfluenceFlee-v0": "home, g = 0",
+}
+"""What the ids of :data:`HELD` are, in words (reports name them so)."""
 
 
 def make_scripted(env_id: str, name: str, seed: int = 0) -> Any:

@@ -1,0 +1,175 @@
+"""The results page's influence-suite section (issue 36): per env of
+:data:`lili.envs.influence.SUITE`, its scripted policies' derived returns beside the learned
+agents' final returns, the share of the gap each closes from SAC to the Oracle and from SAC to
+the scripted influencer, and how often the partner sits where the influencer holds it; then
+issue 36's goals on that env as claims (:func:`lili.experiments.claims.influence_goals`).
+
+The scripted returns are the ones each env's docstring derives (``SUITE``'s second entry, held
+there and nowhere else; ``benchmarks/influence.py`` measures them by simulation), so the page
+runs no simulation. The learned rows are the ``influence`` preset's runs on the env, or, for an
+env the paper's presets run (Point Mass), that preset's runs, the ones its section shows.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from lili.envs.influence import HELD, HELD_WHERE, POLICIES, SUITE
+from lili.experiments.claims import (
+    VERDICTS,
+    Evidence,
+    Locate,
+    check_claim,
+    claims_markdown,
+    influence_goals,
+    load_evidence,
+)
+from lili.experiments.presets import PRESETS, Preset
+from lili.experiments.provenance import (
+    interactions_text,
+    reproduce_commands,
+    setting,
+    sources_markdown,
+)
+from lili.report.files import Run
+from lili.report.stats import final_performance, gap_share, held_share, iqm, iqm_ci
+from lili.report.style import algo_label
+from lili.report.tables import fmt_interval
+
+__all__ = ["LEARNED", "influence_part", "influence_rows", "influence_section"]
+
+LEARNED = ("sac", "lili-no-influence", "lili", "oracle", "oracle-last")
+"""The learned rows of each env's table, in order, where the records hold them."""
+
+
+def influence_part(env: str) -> Preset:
+    """The preset part whose runs are ``env``'s learned rows: the ``influence`` preset's groups
+    on it, else the first of the paper's parts that runs it (Point Mass: ``point-mass``)."""
+    candidates = [PRESETS["influence"], *(PRESETS[n] for n in PRESETS["paper"].includes)]
+    for part in candidates:
+        if env in part.envs:
+            return part.for_env(env)
+    raise ValueError(f"no preset runs the influence-suite env {env!r}; allowed: "
+                     f"{', '.join(e for p in candidates for e in p.envs)}")
+
+
+def _learned(algo: str, runs: Sequence[Run], held: tuple[int, ...] | None) -> dict[str, Any]:
+    finals = [final_performance(r) for r in runs]
+    shares = [] if held is None else [held_share(r, held) for r in runs]
+    return {"policy": algo, "scripted": False, "return": iqm_ci(finals), "runs": list(runs),
+            "held": shares if shares and None not in shares else None}
+
+
+def influence_rows(env: str, part: Preset, evidence: Evidence) -> list[dict[str, Any]]:
+    """The rows of ``env``'s table: the scripted policies (``return``: (derived, None, None)),
+    then each of :data:`LEARNED` that ``evidence`` holds (``return``: IQM and its interval over
+    seeds; ``held``: each seed's share, None where the env names no held strategy), each with
+    ``gap_oracle`` and ``gap_influencer``, the shares of the gaps from SAC's IQM."""
+    known = SUITE[env][1]
+    rows: list[dict[str, Any]] = [{"policy": name, "scripted": True,
+                                   "return": (known[name], None, None)}
+                                  for name in POLICIES if name in known]
+    group = part.groups[0]
+    for algo in LEARNED:
+        runs = evidence.get((group.folder, algo), []) if algo in group.algos else []
+        if runs:
+            rows.append(_learned(algo, runs, HELD.get(env)))
+    by_policy = {r["policy"]: r["return"][0] for r in rows}
+    for row in rows:
+        row["gap_oracle"] = gap_share(row["return"][0], by_policy.get("sac"),
+                                      by_policy.get("oracle"))
+        row["gap_influencer"] = gap_share(row["return"][0], by_policy.get("sac"),
+                                          known.get("influencer"))
+    return rows
+
+
+def _share(value: float | None) -> str:
+    return "—" if value is None else f"{value:.2f}"
+
+
+def _held(shares: list[float] | None) -> str:
+    if not shares:
+        return "—"
+    text = f"{100 * iqm(shares):.0f}%"
+    if len(shares) > 1:
+        text += " (" + " / ".join(f"{100 * s:.0f}" for s in shares) + ")"
+    return text
+
+
+def _table(env: str, part: Preset, rows: list[dict[str, Any]]) -> str:
+    group = part.groups[0]
+    lines = ["| policy | return IQM [95% CI] | seeds | interactions | gap closed, SAC to "
+             "Oracle | gap closed, SAC to influencer | held (per seed) | setting |",
+             "|---|---:|---:|---:|---:|---:|---:|---|"]
+    for row in rows:
+        if row["scripted"]:
+            cells = [f"scripted: {row['policy'].replace('-', ' ')}",
+                     f"{row['return'][0]:.3f} (derived)", "—", "—"]
+            held, how = "—", "—"
+        else:
+            runs = row["runs"]
+            cells = [algo_label(row["policy"]), fmt_interval(*row["return"], spec=".3f"),
+                     str(len(runs)), interactions_text(runs)]
+            held, how = _held(row["held"]), setting(runs, group, part)
+        cells += [_share(row["gap_oracle"]), _share(row["gap_influencer"]), held, how]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _env_section(env: str, part: Preset, evidence: Evidence) -> tuple[str, list]:
+    rows = influence_rows(env, part, evidence)
+    results = [(part, check_claim(part, claim, evidence)) for claim in influence_goals(env)]
+    held = HELD.get(env)
+    held_text = (f"Held: the partner at {HELD_WHERE[env]} (strategy id "
+                 f"{' or '.join(str(i) for i in held)}), where the scripted influencer holds it."
+                 if held is not None else "Held: not defined here (`lili.envs.influence.HELD` "
+                 "names no strategy the scripted influencer holds this partner at).")
+    learned = "" if any(not r["scripted"] for r in rows) else "No committed records of learned " \
+        "agents.\n\n"
+    if part.name in PRESETS["paper"].includes:  # the paper's runs: that section says how
+        reproduce = f" Records and `lili reproduce` commands: the {part.title} section above."
+    else:
+        commands = reproduce_commands(part, evidence)
+        reproduce = (" Reproduce: " + "; ".join(f"`{c}`" for c in commands) + "."
+                     if commands else "")
+    text = (f"### {env}\n\n{_table(env, part, rows)}\n{learned}{held_text}{reproduce}\n\n"
+            f"{claims_markdown(results, with_part=False, rules=False)}")
+    return text, results
+
+
+def influence_section(locate: Locate, paper_evidence: Evidence) -> tuple[str, list]:
+    """The section's markdown and its claim results: one table and the goals per env of the
+    suite. ``locate`` finds the ``influence`` preset's records; ``paper_evidence`` holds the
+    paper's parts' runs (Point Mass's rows are that section's runs, not read twice)."""
+    paper = PRESETS["paper"].includes
+    sections, results = [], []
+    for env in SUITE:
+        part = influence_part(env)
+        evidence = paper_evidence if part.name in paper else load_evidence(part, locate)
+        text, mine = _env_section(env, part, evidence)
+        sections.append(text)
+        results += mine
+    influence = PRESETS["influence"]
+    counts = ", ".join(f"{sum(r.verdict == v for _, r in results)} {v}" for v in VERDICTS[1:]
+                       if any(r.verdict == v for _, r in results))
+    passed = sum(r.verdict == "PASS" for _, r in results)
+    head = (
+        "## Influence suite (not in the paper; issue 36)\n\n"
+        "Envs whose best greedy and best influencing returns are known by construction "
+        "(`lili.envs.influence`, docs/influence.md). Scripted rows: the long-run return per "
+        "interaction that each env's docstring derives for its no-information, greedy and "
+        "influencing policies (told the partner's strategy; `benchmarks/influence.py` measures "
+        "them equal by simulation). Learned rows: the final return over seeds as elsewhere on "
+        "this page (the `influence` preset's runs; Point Mass: the Point Mass section's). "
+        "Gap closed = (R - R_SAC) / (R_end - R_SAC), on the IQMs, with R_end the Oracle's IQM "
+        "or the scripted influencer's derived return; held = each seed's share of its last 10% "
+        "of interactions in which the partner was at a strategy the scripted influencer holds "
+        "it at, IQM over seeds (per seed in brackets). Goals (issue 36): on every env where "
+        "the Oracle comes within 0.1 of the scripted influencer, LILI closes at least 0.8 of "
+        "the gap from SAC to the Oracle, at 3 seeds; checked below, a goal whose condition "
+        f"fails is reported as not applicable. **{passed} of the {len(results)} goal checks "
+        f"PASS{', ' if counts else ''}{counts}.**\n\n"
+        f"**Evidence** (committed records)\n\n{sources_markdown(influence, locate)}\n"
+    )
+    return head + "\n".join(sections), results
