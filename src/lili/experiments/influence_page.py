@@ -17,6 +17,8 @@ from typing import Any
 
 from lili.envs.influence import HELD, HELD_WHERE, POLICIES, SUITE
 from lili.experiments.claims import (
+    GOAL_GAP,
+    GOAL_ORACLE_MARGIN,
     VERDICTS,
     Evidence,
     Locate,
@@ -97,7 +99,7 @@ def _held(shares: list[float] | None) -> str:
     return text
 
 
-def _table(env: str, part: Preset, rows: list[dict[str, Any]]) -> str:
+def _table(part: Preset, rows: list[dict[str, Any]]) -> str:
     group = part.groups[0]
     lines = ["| policy | return IQM [95% CI] | seeds | interactions | gap closed, SAC to "
              "Oracle | gap closed, SAC to influencer | held (per seed) | setting |",
@@ -125,15 +127,15 @@ def _env_section(env: str, part: Preset, evidence: Evidence) -> tuple[str, list]
                  f"{' or '.join(str(i) for i in held)}), where the scripted influencer holds it."
                  if held is not None else "Held: not defined here (`lili.envs.influence.HELD` "
                  "names no strategy the scripted influencer holds this partner at).")
-    learned = "" if any(not r["scripted"] for r in rows) else "No committed records of learned " \
-        "agents.\n\n"
+    learned = ("" if any(not r["scripted"] for r in rows)
+               else "No committed records of learned agents.\n\n")
     if part.name in PRESETS["paper"].includes:  # the paper's runs: that section says how
         reproduce = f" Records and `lili reproduce` commands: the {part.title} section above."
     else:
         commands = reproduce_commands(part, evidence)
         reproduce = (" Reproduce: " + "; ".join(f"`{c}`" for c in commands) + "."
                      if commands else "")
-    text = (f"### {env}\n\n{_table(env, part, rows)}\n{learned}{held_text}{reproduce}\n\n"
+    text = (f"### {env}\n\n{_table(part, rows)}\n{learned}{held_text}{reproduce}\n\n"
             f"{claims_markdown(results, with_part=False, rules=False)}")
     return text, results
 
@@ -160,14 +162,16 @@ def influence_section(locate: Locate, paper_evidence: Evidence) -> tuple[str, li
         "(`lili.envs.influence`, docs/influence.md). Scripted rows: the long-run return per "
         "interaction that each env's docstring derives for its no-information, greedy and "
         "influencing policies (told the partner's strategy; `benchmarks/influence.py` measures "
-        "them equal by simulation). Learned rows: the final return over seeds as elsewhere on "
-        "this page (the `influence` preset's runs; Point Mass: the Point Mass section's). "
+        "them by simulation: `benchmarks/results/influence*.md`). Learned rows: the final "
+        "return over seeds as elsewhere on this page (the `influence` preset's runs; Point "
+        "Mass: the Point Mass section's). "
         "Gap closed = (R - R_SAC) / (R_end - R_SAC), on the IQMs, with R_end the Oracle's IQM "
         "or the scripted influencer's derived return; held = each seed's share of its last 10% "
         "of interactions in which the partner was at a strategy the scripted influencer holds "
         "it at, IQM over seeds (per seed in brackets). Goals (issue 36): on every env where "
-        "the Oracle comes within 0.1 of the scripted influencer, LILI closes at least 0.8 of "
-        "the gap from SAC to the Oracle, at 3 seeds; checked below, a goal whose condition "
+        f"the Oracle comes within {GOAL_ORACLE_MARGIN:g} of the scripted influencer, LILI "
+        f"closes at least {GOAL_GAP:g} of the gap from SAC to the Oracle, at 3 seeds; checked "
+        "below (`lili.experiments.claims.influence_goals`), a goal whose condition "
         f"fails is reported as not applicable. **{passed} of the {len(results)} goal checks "
         f"PASS{', ' if counts else ''}{counts}.**\n\n"
         f"**Evidence** (committed records)\n\n{sources_markdown(influence, locate)}\n"
