@@ -10,7 +10,7 @@ import pytest
 from test_claims import write_run
 
 from lili.envs.influence import SUITE
-from lili.experiments.claims import check_claims, load_evidence, out_layout
+from lili.experiments.claims import check_claims, claims_markdown, load_evidence, out_layout
 from lili.experiments.influence_page import influence_section
 from lili.experiments.plan import plan
 from lili.experiments.presets import PRESETS, get_preset
@@ -70,6 +70,8 @@ def test_the_gap_goal_is_not_applicable_where_the_oracle_falls_short(tmp_path: P
     share = got[f"{SWITCH}: LILI closes >= 0.8 of the SAC-to-Oracle gap"]
     assert share.verdict == "not applicable"
     assert share.ours.startswith("0.52 [") and share.ours.endswith(": FAIL")  # still shown
+    assert "1 FAIL, 4 too few seeds, 1 not applicable, of 6 claims." in claims_markdown(
+        check_claims(PRESETS["influence"], out_layout(tmp_path)))
 
 
 def test_a_folder_of_several_envs_is_read_one_env_at_a_time(tmp_path: Path) -> None:
