@@ -10,7 +10,7 @@ import pytest
 import yaml
 
 import lili.envs  # noqa: F401
-from lili import cli
+from lili import cli, runs
 from lili.agents import LILI, SAC, Oracle
 from lili.agents.registry import config_for
 from lili.config import AgentConfig
@@ -47,9 +47,13 @@ def _train(out, cfg_file, algo="lili", n=10, extra=()):
                      str(out), "--config", cfg_file, "--no-progress", *extra])
 
 
-def test_run_folder_contents(tmp_path, cfg_file):
-    assert _train(tmp_path / "a", cfg_file, n=6) == 0
+def test_run_folder_contents(tmp_path, cfg_file, monkeypatch):
     run = tmp_path / "a" / "Driving2D-v0" / "lili" / "seed_0"
+    # A commit made while a run trains must not be credited with the run's numbers. The stand-in
+    # for git's HEAD moves once the run has logged an interaction (a commit made mid-run).
+    monkeypatch.setattr(runs, "_git_commit", lambda: "moved" if (run / "metrics.csv").exists()
+                        and len((run / "metrics.csv").read_text().splitlines()) > 1 else "start")
+    assert _train(tmp_path / "a", cfg_file, n=6) == 0
     rows = _rows(run / "metrics.csv")
     assert [int(r["interaction"]) for r in rows] == list(range(6))
     assert {"return", "success", "strategy_0", "strategy_id", "critic_loss", "rep_loss"} <= set(
@@ -60,6 +64,7 @@ def test_run_folder_contents(tmp_path, cfg_file):
     summary = json.loads((run / "summary.json").read_text())
     assert summary["interactions"] == 6
     assert {"jax", "jaxlib", "optax", "cpu"} <= set(summary["versions"])
+    assert summary["git_commit"] == "start"
     assert summary["final_return"] == float(rows[-1]["return"])
     assert "final_return_policy" not in summary  # only runs with random interactions have it
     # CPU-seconds of the training (what lili.experiments.costs estimates from): at least the

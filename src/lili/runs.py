@@ -288,6 +288,9 @@ class RunLogger:
         self.dir = Path(run_dir)
         self.dir.mkdir(parents=True, exist_ok=True)
         self.checkpoint_every = checkpoint_every
+        # The code that trains is what was imported now; the checkout may move on before the
+        # run ends (a commit while it trains), so the summary names this commit, not that one.
+        self.git_commit = _git_commit()
         self.columns = metric_columns(strategy_dim)
         self.strategy_dim = strategy_dim
         path = self.dir / "metrics.csv"
@@ -393,7 +396,7 @@ class RunLogger:
             "cpu_time_s": (round(stream.cpu_time, 2) if np.isfinite(stream.cpu_time)
                            else None),
             "versions": _versions(),
-            "git_commit": _git_commit(),
+            "git_commit": self.git_commit,
         }
         (self.dir / "summary.json").write_text(json.dumps(summary, indent=2))
         self.close()
