@@ -7,6 +7,10 @@ import pytest
 
 from lili.buffer import InteractionBuffer, sample
 
+# The agents call ``sample`` inside their jitted updates; jitted here too, each test compiles it
+# once instead of dispatching (and compiling) its dozens of ops one by one on every call.
+_sample_jit = jax.jit(sample, static_argnums=(3, 4, 5, 6))
+
 
 def _traj(k: int, n: int, obs_dim: int = 2, act_dim: int = 1) -> dict:
     """Interaction k with n steps; every value encodes (k, t) so samples can be traced back."""
@@ -26,8 +30,8 @@ def _filled(count: int, capacity: int = 8, horizon: int = 5, lengths=None) -> In
 
 def _sample(buf, key, history, b=64, m=4):
     arrays = {k: jnp.asarray(v) for k, v in buf.arrays.items()}
-    return jax.tree_util.tree_map(np.asarray, sample(arrays, jnp.int32(buf.count), key, b, m,
-                                                     history))
+    return jax.tree_util.tree_map(np.asarray, _sample_jit(arrays, jnp.int32(buf.count), key, b, m,
+                                                          history))
 
 
 def test_sample_shapes_and_consistency():
@@ -102,7 +106,7 @@ def test_state_dict_round_trip_and_bad_length():
 def test_subsampled_window_always_holds_the_last_step():
     buf = _filled(6, horizon=10, lengths=[10, 4, 1])
     arrays = {k: jnp.asarray(v) for k, v in buf.arrays.items()}
-    batch = sample(arrays, jnp.int32(buf.count), jax.random.PRNGKey(5), 64, 2, 1, 5)
+    batch = _sample_jit(arrays, jnp.int32(buf.count), jax.random.PRNGKey(5), 64, 2, 1, 5)
     win = jax.tree_util.tree_map(np.asarray, batch["window"])
     k = np.asarray(batch["index"])
     lengths = np.array([10, 4, 1])[np.stack([k - 1, k], -1) % 3]
@@ -131,7 +135,7 @@ def test_full_window_weights_match_the_expected_training_sample():
     arrays = {k: jnp.asarray(v) for k, v in buf.arrays.items()}
     rews, idx = [], []
     for s in range(300):
-        b = sample(arrays, jnp.int32(3), jax.random.PRNGKey(s), 8, 1, 1, 5)
+        b = _sample_jit(arrays, jnp.int32(3), jax.random.PRNGKey(s), 8, 1, 1, 5)
         rews.append(np.asarray(b["window"]["rew"])[:, 1])
         idx.append(np.asarray(b["index"]))
     rews, idx = np.concatenate(rews), np.concatenate(idx)
