@@ -37,7 +37,7 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
 
 @pytest.mark.parametrize(("script", "args"), [
     ("play_bot", ["a=scripted:greedy"]), ("latent_probe", ["run"]), ("influence", []),
-    ("success_by_strategy", ["run"]), ("drift_lagged", [])])
+    ("success_by_strategy", ["run"]), ("drift_lagged", []), ("boundary_probe", ["run"])])
 @pytest.mark.parametrize("name", ["../x", "/tmp/x", ".hidden", ""])
 def test_result_name_must_be_a_plain_file_name(script: str, args: list[str], name: str,
                                                monkeypatch, capsys) -> None:
@@ -282,4 +282,48 @@ def test_collapse_records_finds_the_recorded_collapses_and_reads_only(capsys, mo
     assert before == {p: p.stat().st_mtime for p in before}
     with pytest.raises(SystemExit, match="no metrics.csv"):
         monkeypatch.setattr("sys.argv", ["collapse_records.py", str(root / "nowhere")])
+        script.main()
+
+
+def test_boundary_probe_setups_are_real_flee_interactions() -> None:
+    import gymnasium as gym
+
+    import lili.envs  # noqa: F401
+
+    script = _script("boundary_probe")
+    env = gym.make("lili/InfluenceFlee-v0").unwrapped
+    for k in range(-4, 5):
+        for k_end in range(max(-4, k - 1), min(4, k + 1) + 1):
+            traj = script.setup(k, k_end)
+            env.reset(seed=0)
+            env.partner.k = k
+            rewards = [env.step(a)[1] for a in traj["act"]]
+            np.testing.assert_allclose(rewards, traj["rew"], atol=1e-6)
+            assert env.partner.k == script.fled(k, k_end)  # the env's partner moved as fled says
+    assert script.group_of(2, 3) == "flees" and script.group_of(-4, 1) == "flees"
+    assert script.group_of(2, 1) == "toward home" and script.group_of(1, 0) == "home next"
+    assert [script.influencer_end(k) for k in (-4, -1, 0, 2, 4)] == [-4, -2, 0, 3, 4]
+
+
+def test_boundary_probe_on_a_saved_agent(tmp_path: Path, monkeypatch) -> None:
+    from lili.agents import make_agent
+
+    script = _script("boundary_probe")
+    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
+    run = tmp_path / "run"
+    make_agent("lili", "lili/InfluenceFlee-v0", seed=0).save(
+        run / "checkpoints" / "ckpt_0" / "agent.msgpack")
+    monkeypatch.setattr("sys.argv", ["x", str(run), "--name", "b"])
+    script.main()
+    (row,) = json.loads((tmp_path / "b.json").read_text())["runs"]
+    assert row["checkpoint"] == "ckpt_0" and row["algo"] == "lili"
+    assert len(row["answers"]) == 25  # every slot with the three ends around it, 2 off the edge
+    assert {r["group"] for r in row["answers"]} == {"flees", "toward home", "home next"}
+    for r in row["answers"]:
+        assert -4 <= r["policy_end"] <= 4 and -4 <= r["decoded"] <= 4
+    sac = tmp_path / "sac"
+    make_agent("sac", "lili/InfluenceFlee-v0", seed=0).save(
+        sac / "checkpoints" / "ckpt_0" / "agent.msgpack")
+    monkeypatch.setattr("sys.argv", ["x", str(sac), "--name", "b"])
+    with pytest.raises(SystemExit, match="needs an agent with a latent"):
         script.main()

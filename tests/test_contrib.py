@@ -195,6 +195,18 @@ def test_prediction_critic_reads_the_decoders_predictions_and_not_z():
     assert np.isfinite(float(metrics["critic_loss"]))
 
 
+def test_set_encoder_maps_the_pooled_features_by_an_mlp_and_stays_permutation_invariant():
+    agent, core, state, batch = _point_mass_lili("lili-set-encoder")
+    # Two layers per width: one before the pooling (as LILI's E), one after; then z's map.
+    assert len(state.model["encoder"]["params"]) == 2 * len(SMALL.enc_hidden) + 1
+    prev = window_part(batch["window"], slice(None, -1))
+    z = np.asarray(core._encode(state.model["encoder"], state.norm, prev))
+    # The steps of an interaction are a set: reversing their order leaves z as it was.
+    flipped = {k: (v[:, :, ::-1] if v.ndim >= 3 else v) for k, v in prev.items()}
+    np.testing.assert_allclose(np.asarray(core._encode(state.model["encoder"], state.norm,
+                                                       flipped)), z, rtol=1e-5, atol=1e-6)
+
+
 # One variant in the default suite; the others run the same code path (slow).
 @pytest.mark.parametrize("algo", [a if a == CONTRIB_ALGOS[0] else
                                   pytest.param(a, marks=pytest.mark.slow) for a in CONTRIB_ALGOS])

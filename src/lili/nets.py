@@ -76,10 +76,15 @@ class Encoder(nn.Module):
         h = x
         for width in self.hidden:
             h = nn.relu(nn.Dense(width)(h))
-        w = weight[..., None].astype(h.dtype)
-        pooled = (h * w).sum(-2) / jnp.maximum(w.sum(-2), 1e-6)
-        pooled = pooled.reshape(*pooled.shape[:-2], -1)
-        return nn.Dense(self.latent_dim)(pooled)
+        return nn.Dense(self.latent_dim)(pool(h, weight))
+
+
+def pool(h: jax.Array, weight: jax.Array) -> jax.Array:
+    """Each interaction's weighted mean of per-transition features ``h`` [..., N, S, F] over its
+    steps, the N interactions' means concatenated in order: [..., N * F]."""
+    w = weight[..., None].astype(h.dtype)
+    pooled = (h * w).sum(-2) / jnp.maximum(w.sum(-2), 1e-6)
+    return pooled.reshape(*pooled.shape[:-2], -1)
 
 
 class Decoder(nn.Module):

@@ -68,6 +68,7 @@ TABLE: tuple[Algo, ...] = (
     Algo("lili-posterior", "lili.contrib.latents", LATENT_FIELDS),
     # Its critic reads z's predictions, detached: no critic gradient reaches the encoder.
     Algo("lili-prediction-critic", "lili.contrib.latents", LATENT_FIELDS - {"critic_to_encoder"}),
+    Algo("lili-set-encoder", "lili.contrib.latents", LATENT_FIELDS),
 )
 """Every algo, in display order."""
 

@@ -1,7 +1,8 @@
-"""Five variants of LILI's latent that measured no gain on Drift (``docs/journal/2026-11-to-12.md``,
-"Drift: a categorical latent", "a bottlenecked latent, and one target per next strategy",
-"the noise stops SAC through the critic"), each a subclass of :class:`LILICore` and
-:class:`LILI` under its own algo name, with its options in ``AgentConfig.extra[<algo>]``:
+"""Variants of LILI's latent; the first five measured no gain on Drift
+(``docs/journal/2026-11-to-12.md``, "Drift: a categorical latent", "a bottlenecked latent, and
+one target per next strategy", "the noise stops SAC through the critic"), each a subclass of
+:class:`LILICore` and :class:`LILI` under its own algo name, with its options in
+``AgentConfig.extra[<algo>]``:
 
 - ``lili-categorical``: z is the one-hot of E's largest output (straight-through gradient), so
   that z names one of ``latent_dim`` strategies; option ``balance`` (1.0).
@@ -12,6 +13,8 @@
 - ``lili-posterior``: E is regressed onto a second encoder P(tau^i), whose code D decodes.
 - ``lili-prediction-critic``: the critic reads what z predicts (D at fixed probe inputs)
   instead of z.
+- ``lili-set-encoder``: E maps its pooled transition features to z by an MLP (Deep Sets'
+  rho), not linearly (tried on Flee, issue 36).
 
 Each gives, with its options at the values ``AgentConfig`` once had, the numbers of the
 ``latent_kind`` / ``latent_bottleneck`` / ``latent_target`` / ``critic_latent`` fields it
@@ -35,11 +38,12 @@ from lili.agents.lili import LILI, LILICore
 from lili.agents.registry import register
 from lili.buffer import Batch, Window
 from lili.config import AgentConfig, dataclass_options
-from lili.contrib.nets import QuantisedEncoder, nearest_code, straight_through_one_hot
+from lili.contrib.nets import QuantisedEncoder, SetEncoder, nearest_code, straight_through_one_hot
 from lili.nets import Decoder, Encoder
 
 __all__ = ["CategoricalOptions", "QuantisedOptions", "BottleneckOptions", "CategoricalLILI",
            "QuantisedLILI", "BottleneckLILI", "PosteriorLILI", "PredictionCriticLILI",
+           "SetEncoderLILI",
            "category_imbalance", "quantisation_loss", "bottleneck_kl", "PROBES", "probe_inputs",
            "decoder_predictions"]
 
@@ -285,6 +289,18 @@ class PredictionCriticCore(_VariantCore):
         return self._with_z(x, self.predictions(model, sg(z))), self._with_z(x, sg(z)), z
 
 
+class SetEncoderCore(_VariantCore):
+    """E maps the pooled transition features to z by an MLP (:class:`SetEncoder`), not
+    linearly, so that z can hold what depends on several transitions of the interaction at
+    once (issue 36: Flee's next slot depends on the slot and on where the ego stopped)."""
+
+    algo = "lili-set-encoder"
+
+    def _build(self) -> None:
+        super()._build()
+        self.encoder = SetEncoder(self.config.enc_hidden, self.config.latent_dim)
+
+
 def _variant(core: type[_VariantCore], doc: str) -> type[LILI]:
     """The facade of ``core``'s variant, registered under its algo with its options' check."""
     cls = type(core.__name__.replace("Core", "LILI"), (LILI,),
@@ -300,3 +316,5 @@ PosteriorLILI = _variant(PosteriorCore, "LILI with E regressed onto a posterior 
                                         "(``lili-posterior``).")
 PredictionCriticLILI = _variant(PredictionCriticCore, "LILI whose critic reads z's predictions "
                                                       "(``lili-prediction-critic``).")
+SetEncoderLILI = _variant(SetEncoderCore, "LILI whose encoder has an MLP after the pooling "
+                                          "(``lili-set-encoder``).")

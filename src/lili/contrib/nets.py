@@ -1,5 +1,6 @@
 """Network pieces only :mod:`lili.contrib.latents` uses: the straight-through one-hot, the
-nearest code of a codebook, and an encoder that carries its codebook."""
+nearest code of a codebook, an encoder that carries its codebook, and one with an MLP after the
+pooling."""
 
 from __future__ import annotations
 
@@ -9,9 +10,9 @@ import flax.linen as nn
 import jax
 import jax.numpy as jnp
 
-from lili.nets import Encoder
+from lili.nets import Encoder, pool
 
-__all__ = ["straight_through_one_hot", "nearest_code", "QuantisedEncoder"]
+__all__ = ["straight_through_one_hot", "nearest_code", "QuantisedEncoder", "SetEncoder"]
 
 
 def straight_through_one_hot(logits: jax.Array) -> jax.Array:
@@ -43,3 +44,25 @@ class QuantisedEncoder(nn.Module):
     def __call__(self, x: jax.Array, weight: jax.Array) -> jax.Array:
         self.param("codebook", nn.initializers.normal(0.5), (self.codes, self.latent_dim))
         return Encoder(self.hidden, self.latent_dim)(x, weight)
+
+
+class SetEncoder(nn.Module):
+    """E as Deep Sets' rho(mean phi): the per-transition MLP and pooling of
+    :class:`lili.nets.Encoder`, then an MLP of the same widths on the pooled features before the
+    linear map to z. The core's E maps the pooled features linearly, so z is a linear function
+    of a mean over transitions, and what depends on two transitions at once (Flee's next slot:
+    the slot, read from the rewards, and where the ego stopped, read from the last step) can
+    only be in z as a sum; here z can hold it as such."""
+
+    hidden: Sequence[int]
+    latent_dim: int
+
+    @nn.compact
+    def __call__(self, x: jax.Array, weight: jax.Array) -> jax.Array:
+        h = x
+        for width in self.hidden:
+            h = nn.relu(nn.Dense(width)(h))
+        h = pool(h, weight)
+        for width in self.hidden:
+            h = nn.relu(nn.Dense(width)(h))
+        return nn.Dense(self.latent_dim)(h)
