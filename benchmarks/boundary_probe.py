@@ -113,7 +113,10 @@ class Probe:
         """max over last actions of min_j Q(s_{H-1}, a, z), per end slot they reach."""
         st = self.state
         s = self.core._x(st.norm, jnp.asarray([[x]], jnp.float32), H - 1)
-        s = jnp.concatenate([s, jnp.asarray(z).reshape(1, -1)], -1)
+        z = jnp.asarray(z).reshape(1, -1)
+        # lili-prediction-critic's critic reads what z predicts, not z.
+        code = self.core.predictions(st.model, z) if hasattr(self.core, "predictions") else z
+        s = jnp.concatenate([s, code], -1)
         s = jnp.broadcast_to(s, (len(self.acts), s.shape[-1]))
         q = np.asarray(self.core.critic.apply(st.model["critic"], s,
                                               jnp.asarray(self.acts)[:, None]).min(0))
