@@ -11,7 +11,8 @@ Scripted rows: the mean return per interaction over the last ``--last`` of ``--s
 interactions (Point Mass and Drift: 3000 and 2000, because Point Mass's greedy target
 random-walks slowly and Drift's partner returns at random; Flee: 300 and 240, whole cycles),
 seeds 0-1, beside the value derived in each env's docstring. Learned rows are the runs of the
-``influence`` preset of ``lili reproduce`` (2000 interactions, 3 seeds by default; finished
+``influence`` preset of ``lili reproduce`` (or, for a variant of ``lili.contrib``, of its
+``contrib`` preset: Drift and Flee; 2000 interactions, 3 seeds by default; finished
 runs are skipped, killed ones resumed; ``--jobs`` at a time) under ``--out``; an ablation
 ``FIELD=VALUE[,FIELD=VALUE]`` is the preset's LILI runs (or ``--ablate-algos``') with those
 agent-config fields (``lili reproduce influence --algos lili --set ...``) under
@@ -36,6 +37,7 @@ import gymnasium as gym
 import numpy as np
 from _results import RESULTS, check_result_name
 
+from lili.agents.registry import CONTRIB_ALGOS
 from lili.cli import parse_overrides
 from lili.envs.influence import HELD, SUITE, make_scripted, play
 from lili.experiments import reproduce
@@ -80,15 +82,27 @@ def _score(runs: list, env_id: str) -> dict:
 def learned_returns(algos: list[str], envs: list[str], seeds: int | None,
                     interactions: int | None, jobs: int, out: Path,
                     overrides: dict | None = None) -> dict:
-    """Run the ``influence`` preset's ``algos`` on ``envs`` (with agent-config ``overrides``)
-    into ``out`` and score them: {env: {algo: score}}."""
-    envs = [e for e in envs if e in INFLUENCE_ENVS]
-    if not envs:
-        return {}
-    reproduce("influence", out, seeds=seeds, interactions=interactions, jobs=jobs,
+    """Run ``algos`` on ``envs`` (with agent-config ``overrides``) into ``out`` and score them:
+    {env: {algo: score}}. The ``influence`` preset's algos run there; the variants of
+    :mod:`lili.contrib` through the ``contrib`` preset (on the envs it has)."""
+    scores: dict = {}
+    for preset, mine in (("influence", [a for a in algos if a not in CONTRIB_ALGOS]),
+                         ("contrib", [a for a in algos if a in CONTRIB_ALGOS])):
+        have = {g.env for g in get_preset(preset).groups}
+        where = [e for e in envs if e in INFLUENCE_ENVS and e in have]
+        if mine and where:
+            for env_id, rows in _learned(preset, mine, where, seeds, interactions, jobs, out,
+                                         overrides).items():
+                scores.setdefault(env_id, {}).update(rows)
+    return scores
+
+
+def _learned(preset: str, algos: list[str], envs: list[str], seeds: int | None,
+             interactions: int | None, jobs: int, out: Path, overrides: dict | None) -> dict:
+    reproduce(preset, out, seeds=seeds, interactions=interactions, jobs=jobs,
               algos=tuple(algos), envs=tuple(envs), overrides=overrides, say=lambda line: None)
-    n = interactions or get_preset("influence").interactions
-    runs = find_runs([out / "influence"], upto=n)
+    n = interactions or get_preset(preset).interactions
+    runs = find_runs([out / get_preset(preset).groups[0].folder], upto=n)
     scores: dict = {}
     for env_id in envs:
         for algo in algos:
@@ -167,7 +181,7 @@ def main() -> None:
     check_result_name(p, args.name)
     if not 1 <= args.last <= args.scripted:
         p.error(f"--last {args.last} is invalid; allowed: 1 to --scripted ({args.scripted})")
-    allowed = get_preset("influence").algos
+    allowed = (*get_preset("influence").algos, *CONTRIB_ALGOS)
     bad = [a for a in args.algos + args.ablate_algos if a not in allowed]
     if bad:
         p.error(f"--algos {' '.join(bad)} is invalid; allowed: {', '.join(allowed)}")

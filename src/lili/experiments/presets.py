@@ -208,14 +208,15 @@ def _influence() -> Preset:
 
 
 def _contrib() -> Preset:
-    """LILI beside its variants in :mod:`lili.contrib`, on Drift, where each was measured (not
-    part of ``paper``; ``lili reproduce contrib --algos lili-categorical`` runs one)."""
-    env = "lili/InfluenceDrift-v0"
-    return Preset(name="contrib", title="LILI's variants in lili.contrib, on Drift",
-                  where="not in the paper: variants that measured no gain (README.md, "
+    """LILI beside its variants in :mod:`lili.contrib`, on Drift and Flee, where they were
+    measured (not part of ``paper``; ``lili reproduce contrib --envs influence-flee --algos
+    lili-prediction-critic`` runs one)."""
+    return Preset(name="contrib", title="LILI's variants in lili.contrib, on Drift and Flee",
+                  where="not in the paper: variants kept out of the core (README.md, "
                   "\"Contrib variants\")", interactions=2000,
-                  groups=(Group(folder="contrib", env=env, algos=("lili", *CONTRIB_ALGOS),
-                                env_kwargs=INFLUENCE_KWARGS[env]),))
+                  groups=tuple(Group(folder="contrib", env=env, algos=("lili", *CONTRIB_ALGOS),
+                                     env_kwargs=INFLUENCE_KWARGS.get(env, {}))
+                               for env in ("lili/InfluenceDrift-v0", "lili/InfluenceFlee-v0")))
 
 
 def _build() -> dict[str, Preset]:
