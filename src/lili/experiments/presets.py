@@ -246,8 +246,8 @@ def _build() -> dict[str, Preset]:
                     departures={"random_interactions": 0.1}, paper_interactions=1000,
                     reason="at the paper's setting LILI falls below LILI (no influence), 0.53 "
                     "against 0.90 at 1000 interactions; with a tenth of the interactions "
-                    "played at random over 2000 LILI comes out above it (not decisively at 5 "
-                    "seeds: docs/results.md)"),
+                    "played at random over 2000 LILI comes out above it (not decisively: "
+                    "docs/results.md, \"Air hockey\")"),
         _history_text_rule(),
         _influence(),
         _contrib(),
