@@ -255,7 +255,7 @@ def with_quickstart_table(readme: str, table: str) -> str:
     begin, end = readme.find(QUICKSTART_BEGIN), readme.find(QUICKSTART_END)
     if readme.count(QUICKSTART_BEGIN) != 1 or readme.count(QUICKSTART_END) != 1 or end < begin:
         raise ValueError(f"the README has no {QUICKSTART_BEGIN!r} ... {QUICKSTART_END!r} "
-                         "block (each marker once, in that order)")
+                         "block; allowed: a README with each marker once, in that order")
     head = readme[:begin + len(QUICKSTART_BEGIN)]
     return f"{head}\n{table}{readme[end:]}"
 
@@ -274,10 +274,12 @@ def write_results_page(sources: str | Path = DEFAULT_SOURCES,
         readme = Path(readme)
         try:
             old = readme.read_text(encoding="utf-8")
-        except OSError as e:
-            raise ValueError(f"--readme {readme}: cannot read it ({e})") from None
+        except (OSError, UnicodeDecodeError) as e:
+            raise ValueError(f"--readme {readme}: cannot read it ({e}); allowed: a readable "
+                             "text file, or none") from None
+        table = quickstart_table(sources)  # a bad --sources is its own error, not the README's
         try:
-            new_readme = with_quickstart_table(old, quickstart_table(sources))
+            new_readme = with_quickstart_table(old, table)
         except ValueError as e:
             raise ValueError(f"--readme {readme}: {e}") from None
     text = results_markdown(sources, out.parent / "results", "results")
