@@ -66,6 +66,13 @@ def test_an_env_without_a_strategy_is_refused(wrapper):
         wrapper(_NoStrategy())
 
 
+@pytest.mark.parametrize("wrapper", [StrategyObservation, LastInteractionObservation])
+def test_an_env_with_a_non_flat_observation_is_refused(wrapper):
+    with pytest.raises(ValueError, match=r"needs a flat observation; got shape \(2, 1\); "
+                                         r"allowed: a JAX env whose observation has one axis"):
+        wrapper(PointMass(observation_shape=(2, 1)))
+
+
 def test_the_oracle_on_an_env_without_a_strategy_is_one_clear_error(tmp_path, capsys):
     assert cli.main(["train", "Pendulum-v1", "--algo", "oracle", "--backend", "jax", "--out",
                      str(tmp_path / "r")]) == 2
