@@ -31,7 +31,6 @@ from lili.experiments.claims import (
 from lili.experiments.influence_page import influence_section
 from lili.experiments.presets import PRESETS, Preset
 from lili.experiments.provenance import (
-    departures,
     interactions_text,
     reproduce_commands,
     setting,
@@ -45,7 +44,7 @@ from lili.report.tables import fmt_interval, fmt_mean_se
 from lili.report.variants import plot_variants, variant_rows
 
 __all__ = ["write_results_page", "results_markdown", "DEFAULT_SOURCES", "DEFAULT_OUT",
-           "DEFAULT_README", "reproduce_commands", "departures", "quickstart_table",
+           "DEFAULT_README", "QUICKSTART_BEGIN", "QUICKSTART_END", "quickstart_table",
            "with_quickstart_table"]
 
 DEFAULT_SOURCES = "benchmarks/results/claims_sources.yaml"
