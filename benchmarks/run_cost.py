@@ -23,7 +23,8 @@ import tempfile
 import time
 from pathlib import Path
 
-RESULTS = Path(__file__).resolve().parent / "results"
+from _results import RESULTS, check_result_name
+
 PARTS = ("block", "act", "env", "next_state", "logger")
 
 
@@ -103,6 +104,9 @@ def condition(args, procs: int, flags: bool) -> list[dict]:
     for p in children:
         stdout, _ = p.communicate()
         if p.returncode != 0:
+            for other in children:  # the others' timings would be of another condition
+                other.kill()
+                other.wait()
             raise SystemExit(f"a child failed (exit {p.returncode})")
         out.append(json.loads(stdout.strip().splitlines()[-1]))
     return out
@@ -117,6 +121,19 @@ def main() -> None:
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--name", default="run_cost")
     args = ap.parse_args()
+    # Checked here, before any child starts (these import no agent and no JAX).
+    from lili.agents.registry import ALGOS
+    from lili.envs.core import resolve_env_id
+    from lili.limits import MAX_INTERACTIONS, check_count
+
+    if args.algo not in ALGOS:
+        ap.error(f"--algo {args.algo!r} is invalid; allowed: {', '.join(ALGOS)}")
+    try:
+        args.env = resolve_env_id(args.env)
+        check_count(args.interactions, "--interactions", MAX_INTERACTIONS)
+    except ValueError as e:
+        ap.error(str(e))
+    check_result_name(ap, args.name)
     if args.child:
         print(json.dumps(child(args.algo, args.env, args.interactions, args.seed)))
         return

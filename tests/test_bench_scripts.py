@@ -37,7 +37,8 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
 
 @pytest.mark.parametrize(("script", "args"), [
     ("play_bot", ["a=scripted:greedy"]), ("latent_probe", ["run"]), ("influence", []),
-    ("success_by_strategy", ["run"]), ("drift_lagged", []), ("boundary_probe", ["run"])])
+    ("success_by_strategy", ["run"]), ("drift_lagged", []), ("run_cost", []),
+    ("boundary_probe", ["run"])])
 @pytest.mark.parametrize("name", ["../x", "/tmp/x", ".hidden", ""])
 def test_result_name_must_be_a_plain_file_name(script: str, args: list[str], name: str,
                                                monkeypatch, capsys) -> None:
@@ -263,6 +264,22 @@ def test_drift_frozen_latent_is_the_latent_lili_acts_on(tmp_path: Path) -> None:
                      "--out", str(bad), "--config", str(sac_cfg), "--no-progress"]) == 0
     with pytest.raises(ValueError, match="allowed: a lili or lili-no-influence run"):
         module.frozen_latent(str(bad / "InfluenceDrift-v0" / "sac" / "seed_0"))
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--interactions", "0"], "--interactions 0 is invalid; allowed: an integer in [1, "),
+    (["--algo", "bogus"], "--algo 'bogus' is invalid; allowed: random, "),
+    (["--env", "nowhere"], "unknown env 'nowhere'; allowed: "),
+])
+def test_run_cost_checks_its_flags_before_any_child_starts(args, message, monkeypatch,
+                                                           capsys) -> None:
+    module = _script("run_cost")
+    monkeypatch.setattr(module.subprocess, "Popen", None)  # a child started would fail here
+    monkeypatch.setattr("sys.argv", ["run_cost.py", *args])
+    with pytest.raises(SystemExit):
+        module.main()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert message in err[-1] and err[-1].startswith("run_cost.py: error: "), err
 
 
 def test_collapse_records_finds_the_recorded_collapses_and_reads_only(capsys, monkeypatch) -> None:

@@ -10,6 +10,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+import gymnasium as gym
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -66,6 +67,13 @@ def test_an_env_without_a_strategy_is_refused(wrapper):
         wrapper(_NoStrategy())
 
 
+@pytest.mark.parametrize("wrapper", [StrategyObservation, LastInteractionObservation])
+def test_an_env_with_a_non_flat_observation_is_refused(wrapper):
+    with pytest.raises(ValueError, match=r"needs a flat observation; got shape \(2, 1\); "
+                                         r"allowed: a JAX env whose observation has one axis"):
+        wrapper(PointMass(observation_shape=(2, 1)))
+
+
 def test_the_oracle_on_an_env_without_a_strategy_is_one_clear_error(tmp_path, capsys):
     assert cli.main(["train", "Pendulum-v1", "--algo", "oracle", "--backend", "jax", "--out",
                      str(tmp_path / "r")]) == 2
@@ -75,11 +83,14 @@ def test_the_oracle_on_an_env_without_a_strategy_is_one_clear_error(tmp_path, ca
     assert not (tmp_path / "r").exists()
 
 
-def test_every_jax_env_has_a_strategy_for_the_oracles():
-    for cls in JAX_ENVS.values():
-        env = cls()
-        assert StrategyObservation(env).observation_shape[0] == (
-            env.observation_shape[0] + env.strategy_shape[0])
+def test_every_jax_env_observes_as_its_gymnasium_env_for_the_oracles():
+    """Each JAX env wrapped for either Oracle observes as many numbers as its Gymnasium env
+    wrapped so (what ``JaxRuns`` demands before it trains)."""
+    for env_id, cls in JAX_ENVS.items():
+        for oracle in ("oracle", "oracle-last", "oracle-last-outcome"):
+            wrap_gym, wrap_jax = WRAPPERS[oracle]
+            want = wrap_gym(gym.make(env_id).unwrapped).observation_space.shape
+            assert wrap_jax(cls()).observation_shape == want, (env_id, oracle)
 
 
 @pytest.mark.slow

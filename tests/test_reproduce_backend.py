@@ -67,7 +67,7 @@ def test_the_dry_run_says_which_runs_take_which_path(tmp_path: Path, capsys) -> 
     assert "PointMass-v0/oracle/seed_0  (6 interactions" in out and "backend jax)" in out
     assert "PointMass-v0/lilac/seed_0" in out and "backend gym)" in out
     assert ("--backend jax: 2 runs on the JAX-native path, 1 on the Gymnasium path: algo "
-            "'lilac' has no JAX-native training (1 runs)") in out
+            "'lilac' has no JAX-native training (1 run)") in out
     assert not (tmp_path / "o").exists()
 
 
@@ -111,7 +111,7 @@ def test_a_sweep_with_backend_jax_trains_each_run_on_its_path(tmp_path: Path) ->
                            "--backend", "jax", "--out", str(out), "--no-progress"],
                           capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    assert "--backend jax: 1 runs on the JAX-native path, 1 on the Gymnasium path" in proc.stdout
+    assert "--backend jax: 1 run on the JAX-native path, 1 on the Gymnasium path" in proc.stdout
     runs = out / "point-mass" / "PointMass-v0"
     for algo, backend in (("oracle", "jax"), ("lilac", None)):
         cfg = yaml.safe_load((runs / algo / "seed_0" / "config.yaml").read_text())

@@ -75,3 +75,14 @@ def test_quickstart_block_is_rewritten_in_place_and_checked(tmp_path: Path, caps
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--readme" in err[0] and "quickstart-table" in err[0], err
     assert readme.read_text() == "no markers\n" and not page.exists()
+
+
+def test_another_projects_readme_is_left_alone_by_default(tmp_path: Path, monkeypatch) -> None:
+    """`lili results` at its default --out rewrites ./README.md only when it holds the block."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "README.md").write_text("# their project\n")
+    sources = tmp_path / "sources.yaml"
+    sources.write_text("{}\n")
+    assert main(["results", "--sources", str(sources)]) == 0
+    assert (tmp_path / DEFAULT_OUT).is_file()
+    assert (tmp_path / "README.md").read_text() == "# their project\n"

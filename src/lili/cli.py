@@ -398,11 +398,22 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
 
 
 def cmd_results(args: argparse.Namespace) -> int:
-    from lili.experiments.page import DEFAULT_OUT, DEFAULT_README, write_results_page
+    from lili.experiments.page import (
+        DEFAULT_OUT,
+        DEFAULT_README,
+        QUICKSTART_BEGIN,
+        write_results_page,
+    )
 
     readme = args.readme
-    if readme is None and args.out == DEFAULT_OUT and Path(DEFAULT_README).is_file():
-        readme = DEFAULT_README  # the repo's page and its README go together
+    if readme is None and args.out == DEFAULT_OUT:
+        # The repo's page and its README go together; a README without the block (another
+        # project's, where the page is made from its own --sources) is not this repo's.
+        try:
+            ours = QUICKSTART_BEGIN in Path(DEFAULT_README).read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError):
+            ours = False
+        readme = DEFAULT_README if ours else None
     elif readme == "none":
         readme = None
     path = write_results_page(args.sources, args.out, readme)
@@ -539,8 +550,8 @@ def build_parser() -> argparse.ArgumentParser:
                      "figures in results/ beside it)")
     res.add_argument("--readme", default=None,
                      help=f"a README whose quick-start table block is rewritten from the "
-                     f"quickstart records too (default: {DEFAULT_README} when it exists and "
-                     f"--out is {DEFAULT_OUT}; none: only the page)")
+                     f"quickstart records too (default: {DEFAULT_README} when it holds that "
+                     f"block and --out is {DEFAULT_OUT}; none: only the page)")
     res.set_defaults(func=cmd_results)
 
     c = sub.add_parser("check-env", help="check an env against the repeated-interaction contract")

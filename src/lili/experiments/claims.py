@@ -597,12 +597,14 @@ def _gap(claim: Claim, values: list[list[float]], stats: dict[str, Any]) -> tupl
 def check_claims(preset: Preset, locate: Locate) -> list[tuple[Preset, ClaimResult]]:
     """Every claim of ``preset`` checked against the runs ``locate`` finds (a claim on one env
     against that env's runs alone)."""
-    loaded: dict[str | None, Evidence] = {}
+    loaded: dict[tuple[str, str] | None, Evidence] = {}
     results = []
     for part, claim in claims_for(preset):
-        if claim.env not in loaded:
-            loaded[claim.env] = load_evidence(preset if claim.env is None else part, locate)
-        results.append((part, check_claim(part, claim, loaded[claim.env])))
+        # Keyed by part too: two parts' claims on one env read each part's own groups.
+        key = None if claim.env is None else (part.name, claim.env)
+        if key not in loaded:
+            loaded[key] = load_evidence(preset if key is None else part, locate)
+        results.append((part, check_claim(part, claim, loaded[key])))
     return results
 
 

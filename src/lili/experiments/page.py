@@ -31,7 +31,6 @@ from lili.experiments.claims import (
 from lili.experiments.influence_page import influence_section
 from lili.experiments.presets import PRESETS, Preset
 from lili.experiments.provenance import (
-    departures,
     interactions_text,
     reproduce_commands,
     setting,
@@ -45,7 +44,7 @@ from lili.report.tables import fmt_interval, fmt_mean_se
 from lili.report.variants import plot_variants, variant_rows
 
 __all__ = ["write_results_page", "results_markdown", "DEFAULT_SOURCES", "DEFAULT_OUT",
-           "DEFAULT_README", "reproduce_commands", "departures", "quickstart_table",
+           "DEFAULT_README", "QUICKSTART_BEGIN", "QUICKSTART_END", "quickstart_table",
            "with_quickstart_table"]
 
 DEFAULT_SOURCES = "benchmarks/results/claims_sources.yaml"
@@ -255,7 +254,7 @@ def with_quickstart_table(readme: str, table: str) -> str:
     begin, end = readme.find(QUICKSTART_BEGIN), readme.find(QUICKSTART_END)
     if readme.count(QUICKSTART_BEGIN) != 1 or readme.count(QUICKSTART_END) != 1 or end < begin:
         raise ValueError(f"the README has no {QUICKSTART_BEGIN!r} ... {QUICKSTART_END!r} "
-                         "block (each marker once, in that order)")
+                         "block; allowed: a README with each marker once, in that order")
     head = readme[:begin + len(QUICKSTART_BEGIN)]
     return f"{head}\n{table}{readme[end:]}"
 
@@ -274,10 +273,12 @@ def write_results_page(sources: str | Path = DEFAULT_SOURCES,
         readme = Path(readme)
         try:
             old = readme.read_text(encoding="utf-8")
-        except OSError as e:
-            raise ValueError(f"--readme {readme}: cannot read it ({e})") from None
+        except (OSError, UnicodeDecodeError) as e:
+            raise ValueError(f"--readme {readme}: cannot read it ({e}); allowed: a readable "
+                             "text file, or none") from None
+        table = quickstart_table(sources)  # a bad --sources is its own error, not the README's
         try:
-            new_readme = with_quickstart_table(old, quickstart_table(sources))
+            new_readme = with_quickstart_table(old, table)
         except ValueError as e:
             raise ValueError(f"--readme {readme}: {e}") from None
     text = results_markdown(sources, out.parent / "results", "results")

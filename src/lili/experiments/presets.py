@@ -130,33 +130,34 @@ def _variant_algos(value: Any, bounded: tuple[Any, ...]) -> tuple[str, ...]:
     return ("lili", "sac", "oracle") if value in bounded else ("lili",)
 
 
+def _variant_table(name: str, title: str, where: str, plain: Group,
+                   variants: list[Group]) -> Preset:
+    """An appendix table whose rows are partner variants: LILI on the plain task (``plain``,
+    the Point Mass preset's own runs), a group per variant, and SAC and the Oracle of the plain
+    task as the bounds."""
+    bounds = Group(folder="point-mass", env=PM, algos=("sac", "oracle"), label="bounds")
+    return Preset(name=name, title=title, where=where, interactions=2000,
+                  groups=(plain, *variants, bounds), kind="table", table=name)
+
+
 def _noise() -> Preset:
-    groups = [Group(folder="point-mass", env=PM, algos=("lili",), label="sigma = 0 (Point Mass)",
-                    value=0.0)]
-    for sigma in NOISE[1:]:
-        groups.append(Group(folder=f"noise/sigma_{sigma:g}", env=PM,
-                            algos=_variant_algos(sigma, NOISE_BOUNDED),
-                            env_kwargs={"step_noise": sigma}, label=f"sigma = {sigma:g}",
-                            value=sigma))
-    groups.append(Group(folder="point-mass", env=PM, algos=("sac", "oracle"), label="bounds"))
-    return Preset(name="noise", title="Point Mass, noisy partner (LILI)",
-                  where="Appendix E.1, Table 2", interactions=2000, groups=tuple(groups),
-                  kind="table", table="noise")
+    return _variant_table(
+        "noise", "Point Mass, noisy partner (LILI)", "Appendix E.1, Table 2",
+        Group(folder="point-mass", env=PM, algos=("lili",), label="sigma = 0 (Point Mass)",
+              value=0.0),
+        [Group(folder=f"noise/sigma_{sigma:g}", env=PM, algos=_variant_algos(sigma, NOISE_BOUNDED),
+               env_kwargs={"step_noise": sigma}, label=f"sigma = {sigma:g}", value=sigma)
+         for sigma in NOISE[1:]])
 
 
 def _history() -> Preset:
-    groups = [Group(folder="point-mass", env=PM, algos=("lili",), label="N = 1 (Point Mass)",
-                    value=1)]
-    for n in HISTORY[1:]:
-        groups.append(Group(folder=f"history/n_{n}", env=PM,
-                            algos=_variant_algos(n, HISTORY_BOUNDED),
-                            env_kwargs={"history": n}, config={"history": n},
-                            label=f"N = {n}", value=n))
-    groups.append(Group(folder="point-mass", env=PM, algos=("sac", "oracle"), label="bounds"))
-    return Preset(name="history", title="Point Mass, partner that reacts to the last N "
-                  "interactions (LILI, encoder over the last N)",
-                  where="Appendix E.2, Table 3", interactions=2000, groups=tuple(groups),
-                  kind="table", table="history")
+    return _variant_table(
+        "history", "Point Mass, partner that reacts to the last N interactions (LILI, encoder "
+        "over the last N)", "Appendix E.2, Table 3",
+        Group(folder="point-mass", env=PM, algos=("lili",), label="N = 1 (Point Mass)", value=1),
+        [Group(folder=f"history/n_{n}", env=PM, algos=_variant_algos(n, HISTORY_BOUNDED),
+               env_kwargs={"history": n}, config={"history": n}, label=f"N = {n}", value=n)
+         for n in HISTORY[1:]])
 
 
 def _history_text_rule() -> Preset:
@@ -247,8 +248,8 @@ def _build() -> dict[str, Preset]:
                     departures={"random_interactions": 0.1}, paper_interactions=1000,
                     reason="at the paper's setting LILI falls below LILI (no influence), 0.53 "
                     "against 0.90 at 1000 interactions; with a tenth of the interactions "
-                    "played at random over 2000 LILI comes out above it (not decisively at 5 "
-                    "seeds: docs/results.md)"),
+                    "played at random over 2000 LILI comes out above it (not decisively: "
+                    "docs/results.md, \"Air hockey\")"),
         _history_text_rule(),
         _influence(),
         _contrib(),

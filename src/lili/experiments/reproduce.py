@@ -71,11 +71,15 @@ def _backend_line(specs: list[RunSpec]) -> str:
             if key not in reasons:
                 reasons[key] = jax_reason(s) or "planned for the Gymnasium path"
             why[reasons[key]] = why.get(reasons[key], 0) + 1
-    line = f"  --backend jax: {jax_runs} runs on the JAX-native path"
+    line = f"  --backend jax: {_runs(jax_runs)} on the JAX-native path"
     if why:
         line += (f", {len(specs) - jax_runs} on the Gymnasium path: "
-                 + "; ".join(f"{reason} ({n} runs)" for reason, n in why.items()))
+                 + "; ".join(f"{reason} ({_runs(n)})" for reason, n in why.items()))
     return line
+
+
+def _runs(n: int) -> str:
+    return f"{n} run" + ("" if n == 1 else "s")
 
 
 def _dry_run(name: str, specs: list[RunSpec], status: dict[RunSpec, str], jobs: int,

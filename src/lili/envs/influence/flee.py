@@ -65,8 +65,8 @@ from lili.envs.influence.line import LineEnv, check_horizon, move_to
 __all__ = ["InfluenceFleeEnv", "FleePartner", "SLOT", "SLOTS", "HOME", "end_slot", "fled",
            "SCRIPTED", "KNOWN_RETURNS"]
 
-SLOT = 0.25  # the distance between slots, and the ego's speed
-SPEED = 0.25
+SLOT = 0.25  # the distance between slots
+SPEED = SLOT  # one slot per step: four steps reach the outermost slots
 SLOTS = 4  # slots on each side of home: k in -SLOTS..SLOTS
 HOME = SLOTS  # the strategy id of home (k = 0)
 # The scripted no-information trajectory's x after each of the last three steps (module

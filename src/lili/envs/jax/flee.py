@@ -34,6 +34,8 @@ FleeParams = HorizonParams  # Flee's only option is its horizon
 
 @struct.dataclass
 class ResetDraws:
+    """The first slot's index in [0, 8) (module docstring)."""
+
     index: jax.Array
 
 

@@ -54,6 +54,8 @@ class JaxLineEnv(JaxRepeatedEnv):
 
 @struct.dataclass
 class HorizonParams:
+    """The params of a :class:`HorizonOnlyLineEnv`: the steps of an interaction."""
+
     horizon: jax.Array
 
 

@@ -45,8 +45,10 @@ def _strategy_size(env: JaxRepeatedEnv, who: str) -> int:
 
 
 def _flat_size(shape: tuple[int, ...], what: str, who: str) -> int:
+    """The size of a one-axis ``shape``, or a ValueError saying that ``who`` needs one."""
     if len(shape) != 1:
-        raise ValueError(f"{who} needs a flat {what}; got shape {shape}")
+        raise ValueError(f"{who} needs a flat {what}; got shape {shape}; allowed: a JAX env "
+                         f"whose {what} has one axis, (n,)")
     return int(shape[0])
 
 
