@@ -209,15 +209,15 @@ def _influence() -> Preset:
 
 
 def _contrib() -> Preset:
-    """LILI beside its variants in :mod:`lili.contrib`, on Drift and Flee, where they were
-    measured (not part of ``paper``; ``lili reproduce contrib --envs influence-flee --algos
-    lili-prediction-critic`` runs one)."""
-    return Preset(name="contrib", title="LILI's variants in lili.contrib, on Drift and Flee",
+    """LILI beside its variants in :mod:`lili.contrib`, on the influence suite's envs, where
+    they were measured (not part of ``paper``; ``lili reproduce contrib --envs influence-flee
+    --algos lili-prediction-critic`` runs one)."""
+    return Preset(name="contrib", title="LILI's variants in lili.contrib, on the influence suite",
                   where="not in the paper: variants kept out of the core (README.md, "
                   "\"Contrib variants\")", interactions=2000,
                   groups=tuple(Group(folder="contrib", env=env, algos=("lili", *CONTRIB_ALGOS),
                                      env_kwargs=INFLUENCE_KWARGS.get(env, {}))
-                               for env in ("lili/InfluenceDrift-v0", "lili/InfluenceFlee-v0")))
+                               for env in INFLUENCE_ENVS))
 
 
 def _build() -> dict[str, Preset]:
