@@ -99,3 +99,40 @@ def test_the_section_tables_every_suite_env(tmp_path: Path) -> None:
     assert text.count("No committed records of learned agents.") == 3
     assert len(results) == 2 * len(SUITE)
     assert "**2 of the 8 goal checks PASS, 6 too few seeds.**" in text
+
+
+FLEE = "lili/InfluenceFlee-v0"
+
+
+def test_contrib_variants_are_rows_below_the_preset_and_stay_out_of_the_goals(
+        tmp_path: Path) -> None:
+    # LILI closes (-2.0 - -2.5) / (-0.1 - -2.5) = 0.21 of the gap: the goal FAILs. The variant
+    # would PASS it, and so would the contrib folder's own LILI (the preset's baseline there).
+    core = {"sac": (-2.5, 0.5), "lili": (-2.0, 0.5), "oracle": (-0.1, 0.5)}
+    for spec in plan(get_preset("influence"), tmp_path, seeds=3, envs=(FLEE,),
+                     algos=tuple(core)):
+        write_run(spec, core[spec.algo][0] + 0.01 * spec.seed, 0.0, 0.5)
+    before, core_results = influence_section(out_layout(tmp_path), {})
+    assert "contrib" not in before[before.index(f"### {FLEE}"):]
+    for spec in plan(get_preset("contrib"), tmp_path, seeds=3, envs=(FLEE,),
+                     algos=("lili", "lili-prediction-critic")):
+        write_run(spec, -0.2 + 0.01 * spec.seed, 0.0, 0.5)
+    text, results = influence_section(out_layout(tmp_path), {})
+    flee = text[text.index(f"### {FLEE}"):]
+    table = flee[flee.index("| policy"):flee.index("\n\n", flee.index("| policy"))]
+    labels = [line.split(" | ")[0][2:] for line in table.splitlines()[2:]]
+    assert labels[-3:] == ["LILI", "Oracle", "LILI (prediction critic), contrib"]
+    assert labels.count("LILI") == 1  # the contrib folder's LILI is no row of its own
+    # (-0.19 - -2.49) / (-0.09 - -2.49) = 0.96 of the gap to the Oracle; same columns as LILI's.
+    assert ("| LILI (prediction critic), contrib | -0.190 [-0.200, -0.180] | 3 | 200 | 0.96 | "
+            "0.92 | 0% (0 / 0 / 0) | `interactions=200` |") in flee
+    assert "Rows marked contrib are variants of LILI kept out of the core" in flee
+    assert ("`lili reproduce contrib --algos lili-prediction-critic --envs "
+            "lili/InfluenceFlee-v0 --interactions 200`") in flee
+    # The goals read the core LILI only: the same verdicts and numbers as without the variant.
+    assert [(r.claim.statement, r.verdict, r.ours) for _, r in results] == \
+        [(r.claim.statement, r.verdict, r.ours) for _, r in core_results]
+    gap = next(r for _, r in results if r.claim.statement == f"{FLEE}: LILI closes >= 0.8 of "
+               "the SAC-to-Oracle gap")
+    assert gap.verdict == "FAIL" and gap.ours.startswith("0.21 [")
+    assert "Rows marked contrib" not in text[:text.index(f"### {FLEE}")]  # Drift, Switch: none
