@@ -1,5 +1,6 @@
-"""Network pieces only :mod:`lili.contrib.latents` uses: the straight-through one-hot, the
-nearest code of a codebook, and an encoder that carries its codebook."""
+"""Network pieces only :mod:`lili.contrib` uses: the straight-through one-hot, the nearest code
+of a codebook and an encoder that carries its codebook (:mod:`lili.contrib.latents`), and a
+twin critic with LayerNorm in its hidden layers (:mod:`lili.contrib.critics`)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,8 @@ import jax.numpy as jnp
 
 from lili.nets import Encoder
 
-__all__ = ["straight_through_one_hot", "nearest_code", "QuantisedEncoder"]
+__all__ = ["straight_through_one_hot", "nearest_code", "QuantisedEncoder", "LayerNormMLP",
+           "LayerNormTwinCritic"]
 
 
 def straight_through_one_hot(logits: jax.Array) -> jax.Array:
@@ -43,3 +45,32 @@ class QuantisedEncoder(nn.Module):
     def __call__(self, x: jax.Array, weight: jax.Array) -> jax.Array:
         self.param("codebook", nn.initializers.normal(0.5), (self.codes, self.latent_dim))
         return Encoder(self.hidden, self.latent_dim)(x, weight)
+
+
+class LayerNormMLP(nn.Module):
+    """:class:`~lili.nets.MLP` with a LayerNorm (learned scale and bias) between each hidden
+    layer's Dense and its ReLU, as the critics of Ball et al. 2023 (RLPD) and Nauman et al. 2024
+    (BRO): every hidden feature vector is rescaled to zero mean and unit variance, which bounds
+    how far the Q values can run away from their targets' inputs."""
+
+    hidden: Sequence[int]
+    out: int
+
+    @nn.compact
+    def __call__(self, x: jax.Array) -> jax.Array:
+        for h in self.hidden:
+            x = nn.relu(nn.LayerNorm()(nn.Dense(h)(x)))
+        return nn.Dense(self.out)(x)
+
+
+class LayerNormTwinCritic(nn.Module):
+    """:class:`~lili.nets.TwinCritic` whose two Q networks are :class:`LayerNormMLP`; returns
+    shape [2, batch]."""
+
+    hidden: Sequence[int]
+
+    @nn.compact
+    def __call__(self, x: jax.Array, a: jax.Array) -> jax.Array:
+        q = nn.vmap(LayerNormMLP, variable_axes={"params": 0}, split_rngs={"params": True},
+                    in_axes=None, out_axes=0, axis_size=2)(self.hidden, 1)
+        return q(jnp.concatenate([x, a], -1))[..., 0]

@@ -208,11 +208,12 @@ def _influence() -> Preset:
 
 
 def _contrib() -> Preset:
-    """LILI beside its variants in :mod:`lili.contrib`, on Drift, where each was measured (not
-    part of ``paper``; ``lili reproduce contrib --algos lili-categorical`` runs one)."""
+    """LILI beside its variants in :mod:`lili.contrib`, on Drift, where the first five were
+    measured (not part of ``paper``; ``lili reproduce contrib --algos lili-categorical`` runs
+    one)."""
     env = "lili/InfluenceDrift-v0"
     return Preset(name="contrib", title="LILI's variants in lili.contrib, on Drift",
-                  where="not in the paper: variants that measured no gain (README.md, "
+                  where="not in the paper: variants kept out of the core (README.md, "
                   "\"Contrib variants\")", interactions=2000,
                   groups=(Group(folder="contrib", env=env, algos=("lili", *CONTRIB_ALGOS),
                                 env_kwargs=INFLUENCE_KWARGS[env]),))

@@ -25,6 +25,7 @@ ALGO_LABELS = {
     "lili-bottleneck": "LILI (bottleneck)",
     "lili-posterior": "LILI (posterior target)",
     "lili-prediction-critic": "LILI (prediction critic)",
+    "lili-critic-ln": "LILI (critic LayerNorm)",
 }
 ALGO_COLORS = {
     "random": "#7f7f7f",
