@@ -33,17 +33,20 @@
 # no summary.json. No process runs past START + CAP + 15 s; the whole, with the wheels' install
 # and the tarball, stays under 9 minutes.
 #
-# Time estimate (journal "Many runs on one H200 (issue 33)" and s26's SAC cells): compile and
-# warm-up 32-39 s per process; one Point Mass LILI interaction of K runs in one program 16 ms at
-# K = 1, 70 ms at K = 72, and through `lili train` (run folders, logging) about 17
-# interactions a second per process (K = 8, alone on the GPU); s26's eight SAC processes (K = 3)
-# sharing the GPU ran 2000 interactions in 126-129 s, compile included. So, at 17 interactions
-# a second: the 2000-interaction lines (4 Oracle, 1 LILI, 2 LILI-LN; K = 3 or 7) about 40 + 120
-# = 160 s each, the 4000-interaction LILI lines about 40 + 235 = 275 s, all ten processes at
-# once: 4.5-5 minutes if sharing the GPU costs them nothing, and CAP = 480 s leaves the LONG
-# lines 1.7x that for the contention of ten processes (not measured beyond s26's eight; the
-# 2000-interaction lines end first and leave the GPU to them). GPU time of one call: about 9
-# minutes at most (CAP 480 s + about 30 s of install and tarball), plus the machine's start.
+# Time estimate, from the journal ("Many runs on one H200 (issue 33)", "The noise and history
+# tables' SAC cells, on a GPU"); none of it measured with ten processes at once:
+# - compile and warm-up 32-39 s per program (ten compiling at once on 16 cores: say 60 s);
+# - one Point Mass LILI interaction of K runs in one program: 16 ms at K = 1, 70 ms at K = 72;
+#   through `lili train` with its run folders about 17 interactions a second per process
+#   (K = 8, alone on the GPU: 1074 interactions in 60 s);
+# - s26: four SAC processes (K = 3) beside four Gymnasium-path Oracle processes on one GPU ran
+#   2000 interactions in 126-129 s of training (the program's compile included).
+# So at 17 interactions a second: each 2000-interaction line (4 Oracle, 1 LILI, 2 LILI-LN;
+# K = 3 or 7) 60 + 120 = 180 s, each 4000-interaction LILI line 60 + 235 = 295 s; with all ten
+# at once about 5 minutes if sharing the GPU costs them little. CAP = 480 s gives the
+# 4000-interaction lines 1.6x that for the contention (the 2000-interaction lines end first and
+# leave the GPU to them). GPU time of the call: at most CAP + about 30 s (wheels, jax's
+# start, tarball) = 8.5 minutes, plus the machine's start (1-2 minutes) and the transfers.
 #
 # For the coordinator, from the main checkout's root (the device `run` tool sends the checkout
 # the session started in, at most 64 MiB):

@@ -49,9 +49,10 @@ class QuantisedEncoder(nn.Module):
 
 class LayerNormMLP(nn.Module):
     """:class:`~lili.nets.MLP` with a LayerNorm (learned scale and bias) between each hidden
-    layer's Dense and its ReLU, as the critics of Ball et al. 2023 (RLPD) and Nauman et al. 2024
-    (BRO): every hidden feature vector is rescaled to zero mean and unit variance, which bounds
-    how far the Q values can run away from their targets' inputs."""
+    layer's Dense and its ReLU, as in the critics of Ball et al. 2023 (RLPD, where it curbs the
+    critic's over-extrapolation) and Nauman et al. 2024 (BRO): each hidden feature vector is
+    rescaled to zero mean and unit variance before its learned scale and bias, so Q no longer
+    grows with the scale of its input or of the layers before."""
 
     hidden: Sequence[int]
     out: int
