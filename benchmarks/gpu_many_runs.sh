@@ -13,23 +13,18 @@
 # Every step has its own time limit and the whole stays under BUDGET seconds (default 400);
 # benchmarks/many_runs.py writes its JSON after every row, so a step cut short keeps what it
 # measured. Writes into $OUT: log.txt and at most 6 JSON files.
-# Wheels the device lacks (gymnasium and its two dependencies, tensorboardX) come from .whl/.
+# Wheels the device lacks come from .whl/ (benchmarks/gpu_env.sh).
 set -o pipefail
 cd "$(dirname "$0")/.."
 OUT=${OUT:-/tmp/gpu_many_runs}
-PY=${PYTHON:-python3}
 BUDGET=${BUDGET:-400}
 mkdir -p "$OUT"
 LOG="$OUT/log.txt"
 START=$(date +%s)
-export XLA_PYTHON_CLIENT_PREALLOCATE=false XLA_PYTHON_CLIENT_MEM_FRACTION=0.9
+source benchmarks/gpu_env.sh
+export XLA_PYTHON_CLIENT_MEM_FRACTION=0.9
 # Steps that compile the same program (same K and sizes) reuse it from this cache.
 export JAX_COMPILATION_CACHE_DIR=${JAX_COMPILATION_CACHE_DIR:-/tmp/jax_cache_many_runs}
-export PYTHONPATH=$PWD/src
-if compgen -G ".whl/*.whl" > /dev/null; then
-    "$PY" -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
-        --target /tmp/site .whl/*.whl && export PYTHONPATH=/tmp/site:$PWD/src
-fi
 
 { date -u; nvidia-smi 2>&1 | head -20; nproc; free -g | head -2
   "$PY" -c "import jax, platform; print('jax', jax.__version__, jax.devices(), platform.platform())"

@@ -1,6 +1,7 @@
 """The variants of LILI in lili.contrib: what each changes in the maths, that each is an algo of
 the registry that trains, saves and resumes like the core's, and that run folders written when
-they were AgentConfig fields load at their defaults or name the algo to use."""
+they were AgentConfig fields load at their defaults or name the algo to use. (lili-critic-ln on
+the JAX-native path: tests/test_jax_train.py.)"""
 
 import gymnasium as gym
 import jax
@@ -205,6 +206,47 @@ def test_set_encoder_maps_the_pooled_features_by_an_mlp_and_stays_permutation_in
     flipped = {k: (v[:, :, ::-1] if v.ndim >= 3 else v) for k, v in prev.items()}
     np.testing.assert_allclose(np.asarray(core._encode(state.model["encoder"], state.norm,
                                                        flipped)), z, rtol=1e-5, atol=1e-6)
+
+
+def test_critic_layer_norm_normalises_both_q_networks_and_changes_nothing_else():
+    agent, core, state, batch = _point_mass_lili("lili-critic-ln")
+    (pair,) = state.model["critic"]["params"].values()  # the two Q networks, stacked
+    assert sorted(k for k in pair if k.startswith("LayerNorm")) == ["LayerNorm_0", "LayerNorm_1"]
+    for i, width in enumerate(SMALL.hidden):  # one per hidden layer, each Q its own
+        assert pair[f"LayerNorm_{i}"]["scale"].shape == (2, width)
+    assert jax.tree.structure(state.target["critic"]) == jax.tree.structure(state.model["critic"])
+    # The norm acts: scaling the first layer's weights and bias leaves every Q value as it was
+    # (LayerNorm divides the scale out), where LILI's plain critic scales its Q with them.
+    x, _, _ = core._inputs(state.model, state, batch)
+    plain = LILI(gym.make("lili/PointMass-v0"), SMALL, seed=3)
+
+    def q_scaled(critic, params, c):
+        (name,) = params["params"]
+        dense = params["params"][name]["Dense_0"]
+        scaled = jax.tree.map(lambda v: c * v, dense)
+        p = {"params": {name: {**params["params"][name], "Dense_0": scaled}}}
+        return np.asarray(critic.apply(p, x, batch["act"]))
+
+    np.testing.assert_allclose(q_scaled(core.critic, state.model["critic"], 10.0),
+                               q_scaled(core.critic, state.model["critic"], 1.0), rtol=1e-4,
+                               atol=1e-5)
+    assert not np.allclose(q_scaled(plain.core.critic, plain.state.model["critic"], 10.0),
+                           q_scaled(plain.core.critic, plain.state.model["critic"], 1.0),
+                           rtol=1e-2)
+    # Everything but the critic starts as LILI's at the same seed.
+    for a, b in ((state.actor, plain.state.actor),
+                 (state.model["encoder"], plain.state.model["encoder"]),
+                 (state.model["decoder"], plain.state.model["decoder"])):
+        for u, v in zip(jax.tree.leaves(a), jax.tree.leaves(b), strict=True):
+            np.testing.assert_array_equal(np.asarray(u), np.asarray(v))
+    # One update: the same numbers twice, not LILI's.
+    key = jax.random.PRNGKey(0)
+    _, m1 = core.update(state, batch, key)
+    _, m2 = core.update(state, batch, key)
+    _, m0 = plain.core.update(plain.state, batch, key)
+    assert {k: float(v) for k, v in m1.items()} == {k: float(v) for k, v in m2.items()}
+    assert np.isfinite(float(m1["critic_loss"]))
+    assert float(m1["q"]) != float(m0["q"]) and float(m1["critic_loss"]) != float(m0["critic_loss"])
 
 
 # One variant in the default suite; the others run the same code path (slow).

@@ -139,6 +139,32 @@ def test_an_env_without_a_jax_twin_is_refused(tmp_path, capsys):
 
 
 @pytest.mark.slow
+def test_lili_with_a_layer_norm_critic_trains_on_the_jax_path(tmp_path):
+    """``lili-critic-ln`` (lili.contrib.critics: LILI's core with another critic network)
+    through ``lili train --backend jax``: run folders, the same numbers twice, not LILI's. Two
+    programs to compile (the variant's, LILI's)."""
+    for out in ("ln", "again"):
+        assert _train(tmp_path, "--seeds", "0-1", "--algo", "lili-critic-ln", out=out, n=5) == 0
+    assert _train(tmp_path, "--seeds", "0-1", "--algo", "lili", out="plain", n=5) == 0
+    for seed in (0, 1):
+        ln, again, plain = (_metrics(tmp_path / out / "PointMass-v0" / algo / f"seed_{seed}")
+                            for out, algo in (("ln", "lili-critic-ln"),
+                                              ("again", "lili-critic-ln"), ("plain", "lili")))
+        wall = ln[0].index("wall_time")
+        assert [r[:wall] + r[wall + 1:] for r in ln] == [r[:wall] + r[wall + 1:] for r in again]
+        assert [int(r[0]) for r in ln[1:]] == list(range(5))
+        ret, loss = ln[0].index("return"), ln[0].index("critic_loss")
+        # The warm-up (3 interactions at random) is LILI's; the updates after it are not.
+        assert [r[ret] for r in ln[1:4]] == [r[ret] for r in plain[1:4]]
+        assert all(r[loss] not in ("", "nan") for r in ln[3:])
+        assert [r[loss] for r in ln[3:]] != [r[loss] for r in plain[3:]]
+        run = tmp_path / "ln" / "PointMass-v0" / "lili-critic-ln" / f"seed_{seed}"
+        stored = yaml.safe_load((run / "config.yaml").read_text())
+        assert stored["algo"] == "lili-critic-ln" and stored["backend"] == "jax"
+        assert json.loads((run / "summary.json").read_text())["interactions"] == 5
+
+
+@pytest.mark.slow
 def test_point_mass_lili_learns_on_the_jax_path():
     """The paper's sizes, 4 seeds x 600 interactions: on the Gymnasium path LILI's Point Mass
     runs are at -2 to -3 by then, SAC (the greedy baseline) ends near -5 and random play is

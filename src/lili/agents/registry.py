@@ -61,13 +61,17 @@ TABLE: tuple[Algo, ...] = (
     Algo("lilac", "lili.agents.lilac", LATENT_FIELDS - {"history"}, paper=True),
     Algo("oracle-last", "lili.agents.oracle", SAC_FIELDS),
     Algo("oracle", "lili.agents.oracle", SAC_FIELDS, paper=True),
-    # Variants of LILI that measured no gain (lili.contrib, README "Contrib variants").
+    # Variants of LILI kept out of the core (lili.contrib, README "Contrib variants"); these
+    # five measured no gain.
     Algo("lili-categorical", "lili.contrib.latents", LATENT_FIELDS),
     Algo("lili-quantised", "lili.contrib.latents", LATENT_FIELDS),
     Algo("lili-bottleneck", "lili.contrib.latents", LATENT_FIELDS),
     Algo("lili-posterior", "lili.contrib.latents", LATENT_FIELDS),
     # Its critic reads z's predictions, detached: no critic gradient reaches the encoder.
     Algo("lili-prediction-critic", "lili.contrib.latents", LATENT_FIELDS - {"critic_to_encoder"}),
+    # A variant not yet measured (issue 36's candidate fix for critic divergence).
+    Algo("lili-critic-ln", "lili.contrib.critics", LATENT_FIELDS),
+    # Tried on Flee (issue 36): an MLP after E's pooling.
     Algo("lili-set-encoder", "lili.contrib.latents", LATENT_FIELDS),
 )
 """Every algo, in display order."""

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -34,11 +34,9 @@ import numpy as np
 from lili.agents.base import AgentState, Normaliser, Params
 from lili.agents.core import sg
 from lili.agents.latent import decoder_loss, window_part
-from lili.agents.lili import LILI, LILICore
-from lili.agents.registry import register
 from lili.buffer import Batch, Window
-from lili.config import AgentConfig, dataclass_options
 from lili.contrib.nets import QuantisedEncoder, SetEncoder, nearest_code, straight_through_one_hot
+from lili.contrib.variant import VariantCore, variant
 from lili.nets import Decoder, Encoder
 
 __all__ = ["CategoricalOptions", "QuantisedOptions", "BottleneckOptions", "CategoricalLILI",
@@ -95,11 +93,6 @@ class BottleneckOptions:
                _is_number(self.weight) and self.weight > 0, "a finite number > 0")
 
 
-@dataclass(frozen=True)
-class NoOptions:
-    """A variant without options (``extra[<algo>]`` may only be empty)."""
-
-
 def category_imbalance(p: jax.Array) -> jax.Array:
     """log K - H(p) >= 0 for the batch's mean category probabilities ``p`` [K]: zero when the
     batch uses all K categories equally. A one-hot latent whose encoder starts with one
@@ -147,23 +140,7 @@ def decoder_predictions(decoder: Decoder, params: Params, z: jax.Array, probe_ob
     return sg(decoder.apply(params, s, a, zb).reshape(b, -1))
 
 
-class _VariantCore(LILICore):
-    """A LILI core with options of its own, read from ``config.extra[algo]``."""
-
-    algo: ClassVar[str]
-    options_cls: ClassVar[type] = NoOptions
-
-    def __init__(self, obs_dim: int, act_dim: int, horizon: int, config: AgentConfig,
-                 boundary: str | None = None) -> None:
-        self.options = dataclass_options(config, self.algo, self.options_cls)
-        super().__init__(obs_dim, act_dim, horizon, config, boundary)
-
-    def _prev(self, batch: Batch) -> Window:
-        """E's input for z^k: the window's interactions before k."""
-        return window_part(batch["window"], slice(None, -1))
-
-
-class CategoricalCore(_VariantCore):
+class CategoricalCore(VariantCore):
     """z is the one-hot of E's largest output, trained by the straight-through estimator
     (forward the one-hot, backward the softmax's gradient). Measured on Drift, where a policy
     learns to influence from the partner's predicted goal given as indicators but not from
@@ -184,7 +161,7 @@ class CategoricalCore(_VariantCore):
         return loss
 
 
-class QuantisedCore(_VariantCore):
+class QuantisedCore(VariantCore):
     """z is the codebook vector nearest to E's output (straight-through gradient), and J_rep
     gains the vector-quantisation losses |sg(e) - z|^2 + 0.25 |e - sg(z)|^2. Unlike the
     categorical latent nothing spreads the batch over the codes."""
@@ -207,7 +184,7 @@ class QuantisedCore(_VariantCore):
                 + quantisation_loss(e, model["encoder"]["params"]["codebook"]))
 
 
-class BottleneckCore(_VariantCore):
+class BottleneckCore(VariantCore):
     """An information bottleneck on z: the decoder reads z + eps, eps ~ N(0, I), and J_rep gains
     beta * |z|^2 / 2, the KL of N(z, I) from N(0, I) (a variational bottleneck with unit
     posterior variance, as PEARL's KL on its task latent). Actor, critic and acting use z."""
@@ -224,7 +201,7 @@ class BottleneckCore(_VariantCore):
                 + self.options.weight * bottleneck_kl(z))
 
 
-class PosteriorCore(_VariantCore):
+class PosteriorCore(VariantCore):
     """A second encoder P reads tau^i itself, D predicts tau^i from P(tau^i), and E is
     regressed onto P(tau^i) (squared error, P detached), so z^i is the expected code of the
     interaction to come: every interaction that predicts the same next interaction has one
@@ -254,7 +231,7 @@ class PosteriorCore(_VariantCore):
         return loss + decoder_loss(self.decoder, model["decoder"], norm, batch, code)
 
 
-class PredictionCriticCore(_VariantCore):
+class PredictionCriticCore(VariantCore):
     """The critic reads what z predicts, the decoder's means D(s_p, a_p, z) at :data:`PROBES`
     fixed probe inputs (normalised states from N(0, I), actions from U(-1, 1), a fixed
     generator), detached, so the critic loss no longer shapes E (the algo does not read
@@ -289,7 +266,7 @@ class PredictionCriticCore(_VariantCore):
         return self._with_z(x, self.predictions(model, sg(z))), self._with_z(x, sg(z)), z
 
 
-class SetEncoderCore(_VariantCore):
+class SetEncoderCore(VariantCore):
     """E maps the pooled transition features to z by an MLP (:class:`SetEncoder`), not
     linearly, so that z can hold what depends on several transitions of the interaction at
     once (issue 36: Flee's next slot depends on the slot and on where the ego stopped)."""
@@ -301,20 +278,12 @@ class SetEncoderCore(_VariantCore):
         self.encoder = SetEncoder(self.config.enc_hidden, self.config.latent_dim)
 
 
-def _variant(core: type[_VariantCore], doc: str) -> type[LILI]:
-    """The facade of ``core``'s variant, registered under its algo with its options' check."""
-    cls = type(core.__name__.replace("Core", "LILI"), (LILI,),
-               {"algo": core.algo, "core_cls": core, "__doc__": doc, "__module__": __name__})
-    register(core.algo, cls, options=core.options_cls)
-    return cls
-
-
-CategoricalLILI = _variant(CategoricalCore, "LILI with a one-hot latent (``lili-categorical``).")
-QuantisedLILI = _variant(QuantisedCore, "LILI with a vector-quantised latent (``lili-quantised``).")
-BottleneckLILI = _variant(BottleneckCore, "LILI with a bottlenecked latent (``lili-bottleneck``).")
-PosteriorLILI = _variant(PosteriorCore, "LILI with E regressed onto a posterior encoder "
-                                        "(``lili-posterior``).")
-PredictionCriticLILI = _variant(PredictionCriticCore, "LILI whose critic reads z's predictions "
-                                                      "(``lili-prediction-critic``).")
-SetEncoderLILI = _variant(SetEncoderCore, "LILI whose encoder has an MLP after the pooling "
-                                          "(``lili-set-encoder``).")
+CategoricalLILI = variant(CategoricalCore, "LILI with a one-hot latent (``lili-categorical``).")
+QuantisedLILI = variant(QuantisedCore, "LILI with a vector-quantised latent (``lili-quantised``).")
+BottleneckLILI = variant(BottleneckCore, "LILI with a bottlenecked latent (``lili-bottleneck``).")
+PosteriorLILI = variant(PosteriorCore, "LILI with E regressed onto a posterior encoder "
+                                       "(``lili-posterior``).")
+PredictionCriticLILI = variant(PredictionCriticCore, "LILI whose critic reads z's predictions "
+                                                     "(``lili-prediction-critic``).")
+SetEncoderLILI = variant(SetEncoderCore, "LILI whose encoder has an MLP after the pooling "
+                                         "(``lili-set-encoder``).")

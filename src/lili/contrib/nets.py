@@ -1,6 +1,7 @@
-"""Network pieces only :mod:`lili.contrib.latents` uses: the straight-through one-hot, the
-nearest code of a codebook, an encoder that carries its codebook, and one with an MLP after the
-pooling."""
+"""Network pieces only :mod:`lili.contrib` uses: the straight-through one-hot, the nearest code
+of a codebook, an encoder that carries its codebook and one with an MLP after its pooling
+(:mod:`lili.contrib.latents`), and a twin critic with LayerNorm in its hidden layers
+(:mod:`lili.contrib.critics`)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,8 @@ import jax.numpy as jnp
 
 from lili.nets import Encoder, pool
 
-__all__ = ["straight_through_one_hot", "nearest_code", "QuantisedEncoder", "SetEncoder"]
+__all__ = ["straight_through_one_hot", "nearest_code", "QuantisedEncoder", "SetEncoder",
+           "LayerNormMLP", "LayerNormTwinCritic"]
 
 
 def straight_through_one_hot(logits: jax.Array) -> jax.Array:
@@ -66,3 +68,33 @@ class SetEncoder(nn.Module):
         for width in self.hidden:
             h = nn.relu(nn.Dense(width)(h))
         return nn.Dense(self.latent_dim)(h)
+
+
+class LayerNormMLP(nn.Module):
+    """:class:`~lili.nets.MLP` with a LayerNorm (learned scale and bias) between each hidden
+    layer's Dense and its ReLU, as in the critics of Ball et al. 2023 (RLPD, where it curbs the
+    critic's over-extrapolation) and Nauman et al. 2024 (BRO): each hidden feature vector is
+    rescaled to zero mean and unit variance before its learned scale and bias, so Q no longer
+    grows with the scale of its input or of the layers before."""
+
+    hidden: Sequence[int]
+    out: int
+
+    @nn.compact
+    def __call__(self, x: jax.Array) -> jax.Array:
+        for h in self.hidden:
+            x = nn.relu(nn.LayerNorm()(nn.Dense(h)(x)))
+        return nn.Dense(self.out)(x)
+
+
+class LayerNormTwinCritic(nn.Module):
+    """:class:`~lili.nets.TwinCritic` whose two Q networks are :class:`LayerNormMLP`; returns
+    shape [2, batch]."""
+
+    hidden: Sequence[int]
+
+    @nn.compact
+    def __call__(self, x: jax.Array, a: jax.Array) -> jax.Array:
+        q = nn.vmap(LayerNormMLP, variable_axes={"params": 0}, split_rngs={"params": True},
+                    in_axes=None, out_axes=0, axis_size=2)(self.hidden, 1)
+        return q(jnp.concatenate([x, a], -1))[..., 0]

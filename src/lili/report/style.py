@@ -26,6 +26,7 @@ ALGO_LABELS = {
     "lili-posterior": "LILI (posterior target)",
     "lili-prediction-critic": "LILI (prediction critic)",
     "lili-set-encoder": "LILI (set encoder)",
+    "lili-critic-ln": "LILI (critic LayerNorm)",
 }
 ALGO_COLORS = {
     "random": "#7f7f7f",

@@ -1,0 +1,33 @@
+"""A variant of LILI's critic, not yet measured: ``lili-critic-ln``, LILI whose twin critic has a
+LayerNorm in every hidden layer (:class:`lili.contrib.nets.LayerNormTwinCritic`); everything
+else (encoder, decoder, actor, losses, targets, acting) is LILI's.
+
+The candidate fix of issue 36 (item 4) for the critic divergence that the records show in the
+current core's one collapsing Point Mass seed (``docs/journal/2026-11-to-12.md``, "Point Mass
+LILI's late collapses": its critic loss rose x1.4 and its Q by 0.4 while its return still held,
+then x5.9 and +1.1 as the return fell). It sits here, not in the core, until a measurement
+says it costs nothing on the paper's domains (``benchmarks/gpu_session.sh`` trains it on Point
+Mass, seeds 0-13). No options (``extra["lili-critic-ln"]`` may only be empty).
+"""
+
+from __future__ import annotations
+
+from lili.contrib.nets import LayerNormTwinCritic
+from lili.contrib.variant import VariantCore, variant
+
+__all__ = ["CriticLayerNormCore", "CriticLayerNormLILI"]
+
+
+class CriticLayerNormCore(VariantCore):
+    """LILI's core with :class:`~lili.contrib.nets.LayerNormTwinCritic` as its critic (and so as
+    its target critic, a Polyak copy of the same network)."""
+
+    algo = "lili-critic-ln"
+
+    def _build(self) -> None:
+        super()._build()
+        self.critic = LayerNormTwinCritic(self.config.hidden)
+
+
+CriticLayerNormLILI = variant(CriticLayerNormCore, "LILI with LayerNorm in its critic's hidden "
+                                                   "layers (``lili-critic-ln``).")
