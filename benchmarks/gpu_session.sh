@@ -7,7 +7,7 @@
 # One `lili train point-mass --backend jax` process per line of the table below (the JAX twin
 # of Point Mass, lili.jax_train: the seeds of a line are one program; config.yaml says
 # `backend: jax`), all started at once and sharing the GPU (no XLA preallocation). Its parts
-# (PARTS, default "oracle long collapse critic-ln"):
+# (PARTS, default "oracle long collapse critic-ln variants"):
 #
 #   oracle     the Oracle against the noisy partner (sigma 0.4, 1.0) and the history-dependent
 #              one (N = 5, 11), seeds 0-2, 2000 interactions: the noise and history tables'
@@ -21,6 +21,10 @@
 #   critic-ln  the candidate fix for critic divergence, LILI with LayerNorm in its critic
 #              (lili.contrib.critics, algo lili-critic-ln), seeds 0-13, 2000 interactions, as
 #              two processes of 7 seeds
+#   variants   the two variants that got past LILI's local optimum on Flee (issue 36, item 3;
+#              journal s29), lili-prediction-critic and lili-set-encoder, on Point Mass at
+#              seeds 7-13 (the collapse part's LILI seeds: paired, same path), 2000
+#              interactions: do they cost anything on the paper's influence domain?
 #   sac        SAC in the oracle part's four cells (done: s26's records; not in the default)
 #
 # The run folders land in the layout of `lili reproduce` (noise/sigma_0.4/PointMass-v0/oracle/
@@ -34,16 +38,16 @@
 # and the tarball, stays under 9 minutes.
 #
 # Time estimate, from the journal ("Many runs on one H200 (issue 33)", "The noise and history
-# tables' SAC cells, on a GPU"); none of it measured with ten processes at once:
-# - compile and warm-up 32-39 s per program (ten compiling at once on 16 cores: say 60 s);
+# tables' SAC cells, on a GPU"); none of it measured with twelve processes at once:
+# - compile and warm-up 32-39 s per program (twelve compiling at once on 16 cores: say 60 s);
 # - one Point Mass LILI interaction of K runs in one program: 16 ms at K = 1, 70 ms at K = 72;
 #   through `lili train` with its run folders about 17 interactions a second per process
 #   (K = 8, alone on the GPU: 1074 interactions in 60 s);
 # - s26: four SAC processes (K = 3) beside four Gymnasium-path Oracle processes on one GPU ran
 #   2000 interactions in 126-129 s of training (the program's compile included).
-# So at 17 interactions a second: each 2000-interaction line (4 Oracle, 1 LILI, 2 LILI-LN;
-# K = 3 or 7) 60 + 120 = 180 s, each 4000-interaction LILI line 60 + 235 = 295 s; with all ten
-# at once about 5 minutes if sharing the GPU costs them little. CAP = 480 s gives the
+# So at 17 interactions a second: each 2000-interaction line (4 Oracle, 1 LILI, 2 LILI-LN,
+# 2 variants; K = 3 or 7) 60 + 120 = 180 s, each 4000-interaction LILI line 60 + 235 = 295 s;
+# with all twelve at once about 5 minutes if sharing the GPU costs them little. CAP = 480 s gives the
 # 4000-interaction lines 1.6x that for the contention (the 2000-interaction lines end first and
 # leave the GPU to them). GPU time of the call: at most CAP + about 30 s (wheels, jax's
 # start, tarball) = 8.5 minutes, plus the machine's start (1-2 minutes) and the transfers.
@@ -69,11 +73,11 @@ set -o pipefail
 cd "$(dirname "$0")/.."
 OUT=${OUT:-/tmp/gpu_session}
 CAP=${CAP:-480}
-PARTS=${PARTS:-oracle long collapse critic-ln}
+PARTS=${PARTS:-oracle long collapse critic-ln variants}
 for part in $PARTS; do
-    case $part in oracle|sac|long|collapse|critic-ln) ;;
+    case $part in oracle|sac|long|collapse|critic-ln|variants) ;;
         *) echo "gpu_session.sh: PARTS names '$part'; allowed: oracle, sac, long, collapse," \
-               "critic-ln" >&2; exit 2;;
+               "critic-ln, variants" >&2; exit 2;;
     esac
 done
 mkdir -p "$OUT"
@@ -123,6 +127,8 @@ line long noise-4000/sigma_1 lili 0-2 4000 step_noise=1.0
 line collapse point-mass lili 7-13 2000
 line critic-ln point-mass lili-critic-ln 0-6 2000
 line critic-ln point-mass lili-critic-ln 7-13 2000
+line variants point-mass lili-prediction-critic 7-13 2000
+line variants point-mass lili-set-encoder 7-13 2000
 
 [ "${DRY:-0}" = 1 ] && exit 0
 echo "${#pids[@]} processes (parts: $PARTS), at most $CAP s each" | tee -a "$LOG"

@@ -139,17 +139,17 @@ def test_an_env_without_a_jax_twin_is_refused(tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_lili_with_a_layer_norm_critic_trains_on_the_jax_path(tmp_path):
-    """``lili-critic-ln`` (lili.contrib.critics: LILI's core with another critic network)
+@pytest.mark.parametrize("algo", ["lili-critic-ln", "lili-prediction-critic", "lili-set-encoder"])
+def test_contrib_variants_train_on_the_jax_path(tmp_path, algo):
+    """The contrib variants of JAX_ALGOS (LILI's core with another network or critic input)
     through ``lili train --backend jax``: run folders, the same numbers twice, not LILI's. Two
     programs to compile (the variant's, LILI's)."""
     for out in ("ln", "again"):
-        assert _train(tmp_path, "--seeds", "0-1", "--algo", "lili-critic-ln", out=out, n=5) == 0
+        assert _train(tmp_path, "--seeds", "0-1", "--algo", algo, out=out, n=5) == 0
     assert _train(tmp_path, "--seeds", "0-1", "--algo", "lili", out="plain", n=5) == 0
     for seed in (0, 1):
-        ln, again, plain = (_metrics(tmp_path / out / "PointMass-v0" / algo / f"seed_{seed}")
-                            for out, algo in (("ln", "lili-critic-ln"),
-                                              ("again", "lili-critic-ln"), ("plain", "lili")))
+        ln, again, plain = (_metrics(tmp_path / out / "PointMass-v0" / a / f"seed_{seed}")
+                            for out, a in (("ln", algo), ("again", algo), ("plain", "lili")))
         wall = ln[0].index("wall_time")
         assert [r[:wall] + r[wall + 1:] for r in ln] == [r[:wall] + r[wall + 1:] for r in again]
         assert [int(r[0]) for r in ln[1:]] == list(range(5))
@@ -158,9 +158,9 @@ def test_lili_with_a_layer_norm_critic_trains_on_the_jax_path(tmp_path):
         assert [r[ret] for r in ln[1:4]] == [r[ret] for r in plain[1:4]]
         assert all(r[loss] not in ("", "nan") for r in ln[3:])
         assert [r[loss] for r in ln[3:]] != [r[loss] for r in plain[3:]]
-        run = tmp_path / "ln" / "PointMass-v0" / "lili-critic-ln" / f"seed_{seed}"
+        run = tmp_path / "ln" / "PointMass-v0" / algo / f"seed_{seed}"
         stored = yaml.safe_load((run / "config.yaml").read_text())
-        assert stored["algo"] == "lili-critic-ln" and stored["backend"] == "jax"
+        assert stored["algo"] == algo and stored["backend"] == "jax"
         assert json.loads((run / "summary.json").read_text())["interactions"] == 5
 
 

@@ -58,12 +58,13 @@ from lili.train import NonFiniteError, Stream, _progress_bar, run_interaction_ke
 
 __all__ = ["JAX_ALGOS", "JaxRuns", "check_jax_run", "why_not_jax"]
 
-JAX_ALGOS = ("sac", "lili", "lili-no-influence", "oracle", "oracle-last", "lili-critic-ln")
+JAX_ALGOS = ("sac", "lili", "lili-no-influence", "oracle", "oracle-last", "lili-critic-ln",
+             "lili-prediction-critic", "lili-set-encoder")
 """The algos this path trains: the generic SAC core and LILI's (their update is the shared
 block), the Oracles on their observation of the JAX env (:meth:`wrap_jax_env`,
-:mod:`lili.envs.jax.wrappers`), and of the contrib algos ``lili-critic-ln`` (LILI's core with
-another critic network: the same pure functions); the other contrib algos are not checked on
-this path."""
+:mod:`lili.envs.jax.wrappers`), and of the contrib algos those whose core only swaps a network
+or the critic's input (``lili-critic-ln``, ``lili-prediction-critic``, ``lili-set-encoder``:
+the same pure functions); the other contrib algos are not checked on this path."""
 
 # fold_in datum of the env's key stream (interaction indices stay far below it).
 _ENV_STREAM = 2**31 - 1
