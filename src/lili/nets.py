@@ -76,7 +76,13 @@ class Encoder(nn.Module):
         h = x
         for width in self.hidden:
             h = nn.relu(nn.Dense(width)(h))
-        return nn.Dense(self.latent_dim)(pool(h, weight))
+        pooled = self.head(pool(h, weight))  # before z's layer, which is then the last named
+        return nn.Dense(self.latent_dim)(pooled)
+
+    def head(self, pooled: jax.Array) -> jax.Array:
+        """What the pooled features pass before the linear map to z: nothing here; a variant's
+        hook (called inside ``__call__``, so it may create layers)."""
+        return pooled
 
 
 def pool(h: jax.Array, weight: jax.Array) -> jax.Array:

@@ -11,7 +11,7 @@ import flax.linen as nn
 import jax
 import jax.numpy as jnp
 
-from lili.nets import Encoder, pool
+from lili.nets import Encoder
 
 __all__ = ["straight_through_one_hot", "nearest_code", "QuantisedEncoder", "SetEncoder",
            "LayerNormMLP", "LayerNormTwinCritic"]
@@ -48,26 +48,18 @@ class QuantisedEncoder(nn.Module):
         return Encoder(self.hidden, self.latent_dim)(x, weight)
 
 
-class SetEncoder(nn.Module):
-    """E as Deep Sets' rho(mean phi): the per-transition MLP and pooling of
-    :class:`lili.nets.Encoder`, then an MLP of the same widths on the pooled features before the
-    linear map to z. The core's E maps the pooled features linearly, so z is a linear function
-    of a mean over transitions, and what depends on two transitions at once (Flee's next slot:
-    the slot, read from the rewards, and where the ego stopped, read from the last step) can
-    only be in z as a sum; here z can hold it as such."""
+class SetEncoder(Encoder):
+    """E as Deep Sets' rho(mean phi): :class:`lili.nets.Encoder`'s per-transition MLP and
+    pooling, then an MLP of the same widths on the pooled features before the linear map to z.
+    The core's E maps the pooled features linearly, so z is a linear function of a mean over
+    transitions, and what depends on two transitions at once (Flee's next slot: the slot, read
+    from the rewards, and where the ego stopped, read from the last step) can only be in z as a
+    sum; here z can hold it as such."""
 
-    hidden: Sequence[int]
-    latent_dim: int
-
-    @nn.compact
-    def __call__(self, x: jax.Array, weight: jax.Array) -> jax.Array:
-        h = x
+    def head(self, pooled: jax.Array) -> jax.Array:
         for width in self.hidden:
-            h = nn.relu(nn.Dense(width)(h))
-        h = pool(h, weight)
-        for width in self.hidden:
-            h = nn.relu(nn.Dense(width)(h))
-        return nn.Dense(self.latent_dim)(h)
+            pooled = nn.relu(nn.Dense(width)(pooled))
+        return pooled
 
 
 class LayerNormMLP(nn.Module):
