@@ -37,10 +37,11 @@ import numpy as np
 from _results import check_result_name, write_result
 
 import lili.envs  # noqa: F401  (registers the envs)
-from lili.agents import load_agent
+from lili.agents import CheckpointError, load_agent
 from lili.buffer import InteractionBuffer
 from lili.envs.influence.flee import SLOT, SLOTS, end_slot, fled
 from lili.envs.influence.line import move_to
+from lili.runs import latest_checkpoint
 
 ENV_ID = "lili/InfluenceFlee-v0"
 H = 4
@@ -77,14 +78,6 @@ def setup(k: int, k_end: int) -> dict[str, np.ndarray]:
     if end_slot(x) != k_end:
         raise AssertionError(f"setup ({k}, {k_end}) ended on {end_slot(x)}")
     return {key: np.asarray(v, np.float32) for key, v in rows.items()}
-
-
-def newest_checkpoint(run: Path) -> Path:
-    ckpts = sorted(run.glob("checkpoints/ckpt_*/agent.msgpack"),
-                   key=lambda p: int(p.parent.name.split("_")[1]))
-    if not ckpts:
-        raise SystemExit(f"{run}: no checkpoints/ckpt_*/agent.msgpack")
-    return ckpts[-1]
 
 
 class Probe:
@@ -172,12 +165,15 @@ def main() -> None:
     env = gym.make(ENV_ID)
     results = []
     for run in args.runs:
-        ckpt = newest_checkpoint(run)
-        agent = load_agent(ckpt, env)
+        try:
+            ckpt, _ = latest_checkpoint(run)
+        except CheckpointError as e:
+            raise SystemExit(str(e)) from None
+        agent = load_agent(ckpt / "agent.msgpack", env)
         probe = Probe(agent)
         answers = [probe.answer(k, e) for k in range(-SLOTS, SLOTS + 1)
                    for e in range(-SLOTS, SLOTS + 1) if abs(e - k) <= 1]
-        results.append({"run": str(run), "checkpoint": ckpt.parent.name, "algo": agent.algo,
+        results.append({"run": str(run), "checkpoint": ckpt.name, "algo": agent.algo,
                         "final_return": final_return(run), "summary": summarise(answers),
                         "answers": answers})
     lines = ["Shares right per group of (slot, end) pairs: decoder names k' / policy stops on k' "

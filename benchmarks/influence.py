@@ -12,7 +12,7 @@ interactions (Point Mass and Drift: 3000 and 2000, because Point Mass's greedy t
 random-walks slowly and Drift's partner returns at random; Flee: 300 and 240, whole cycles),
 seeds 0-1, beside the value derived in each env's docstring. Learned rows are the runs of the
 ``influence`` preset of ``lili reproduce`` (or, for a variant of ``lili.contrib``, of its
-``contrib`` preset: Drift and Flee; 2000 interactions, 3 seeds by default; finished
+``contrib`` preset, on the suite's envs; 2000 interactions, 3 seeds by default; finished
 runs are skipped, killed ones resumed; ``--jobs`` at a time) under ``--out``; an ablation
 ``FIELD=VALUE[,FIELD=VALUE]`` is the preset's LILI runs (or ``--ablate-algos``') with those
 agent-config fields (``lili reproduce influence --algos lili --set ...``) under

@@ -327,9 +327,14 @@ def test_boundary_probe_on_a_saved_agent(tmp_path: Path, monkeypatch) -> None:
 
     script = _script("boundary_probe")
     monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
-    run = tmp_path / "run"
-    make_agent("lili", "lili/InfluenceFlee-v0", seed=0).save(
-        run / "checkpoints" / "ckpt_0" / "agent.msgpack")
+    def saved(algo: str, run: Path) -> Path:  # a checkpoint as a run folder holds it
+        make_agent(algo, "lili/InfluenceFlee-v0", seed=0).save(
+            run / "checkpoints" / "ckpt_0" / "agent.msgpack")
+        (run / "checkpoints" / "latest.json").write_text(
+            json.dumps({"checkpoint": "ckpt_0", "interactions": 0}))
+        return run
+
+    run = saved("lili", tmp_path / "run")
     monkeypatch.setattr("sys.argv", ["x", str(run), "--name", "b"])
     script.main()
     (row,) = json.loads((tmp_path / "b.json").read_text())["runs"]
@@ -338,9 +343,6 @@ def test_boundary_probe_on_a_saved_agent(tmp_path: Path, monkeypatch) -> None:
     assert {r["group"] for r in row["answers"]} == {"flees", "toward home", "home next"}
     for r in row["answers"]:
         assert -4 <= r["policy_end"] <= 4 and -4 <= r["decoded"] <= 4
-    sac = tmp_path / "sac"
-    make_agent("sac", "lili/InfluenceFlee-v0", seed=0).save(
-        sac / "checkpoints" / "ckpt_0" / "agent.msgpack")
-    monkeypatch.setattr("sys.argv", ["x", str(sac), "--name", "b"])
+    monkeypatch.setattr("sys.argv", ["x", str(saved("sac", tmp_path / "sac")), "--name", "b"])
     with pytest.raises(SystemExit, match="needs an agent with a latent"):
         script.main()
