@@ -210,14 +210,16 @@ def _influence() -> Preset:
 
 def _contrib() -> Preset:
     """LILI beside its variants in :mod:`lili.contrib`, on the influence suite's envs, where
-    they were measured (not part of ``paper``; ``lili reproduce contrib --envs influence-flee
-    --algos lili-prediction-critic`` runs one)."""
-    return Preset(name="contrib", title="LILI's variants in lili.contrib, on the influence suite",
+    they were measured, and on Point Mass, the paper's influence domain, which a variant must
+    hold before it can become LILI's default (not part of ``paper``; ``lili reproduce contrib
+    --envs influence-flee --algos lili-prediction-critic`` runs one)."""
+    return Preset(name="contrib", title="LILI's variants in lili.contrib, on the influence suite "
+                  "and Point Mass",
                   where="not in the paper: variants kept out of the core (README.md, "
                   "\"Contrib variants\")", interactions=2000,
                   groups=tuple(Group(folder="contrib", env=env, algos=("lili", *CONTRIB_ALGOS),
                                      env_kwargs=INFLUENCE_KWARGS.get(env, {}))
-                               for env in INFLUENCE_ENVS))
+                               for env in (*INFLUENCE_ENVS, PM)))
 
 
 def _build() -> dict[str, Preset]:
