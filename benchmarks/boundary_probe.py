@@ -86,6 +86,9 @@ class Probe:
     def __init__(self, agent) -> None:
         if not agent.core.uses_latent:
             raise SystemExit(f"{agent.algo}: the probe needs an agent with a latent")
+        if agent.core.horizon != H:
+            raise SystemExit(f"the probe scripts interactions of {H} steps (Flee's default "
+                             f"horizon); this agent was trained at horizon {agent.core.horizon}")
         self.agent, self.core, self.state = agent, agent.core, agent.state
         self.xs = np.linspace(-1.0, 1.0, 17, dtype=np.float32)
         self.acts = np.linspace(-1.0, 1.0, 81, dtype=np.float32)
@@ -107,9 +110,7 @@ class Probe:
         st = self.state
         s = self.core._x(st.norm, jnp.asarray([[x]], jnp.float32), H - 1)
         z = jnp.asarray(z).reshape(1, -1)
-        # lili-prediction-critic's critic reads what z predicts, not z.
-        code = self.core.predictions(st.model, z) if hasattr(self.core, "predictions") else z
-        s = jnp.concatenate([s, code], -1)
+        s = jnp.concatenate([s, self.core.critic_code(st.model, z)], -1)
         s = jnp.broadcast_to(s, (len(self.acts), s.shape[-1]))
         q = np.asarray(self.core.critic.apply(st.model["critic"], s,
                                               jnp.asarray(self.acts)[:, None]).min(0))

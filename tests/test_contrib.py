@@ -176,7 +176,7 @@ def test_prediction_critic_reads_the_decoders_predictions_and_not_z():
                                   np.broadcast_to(np.asarray(z)[:, None], (2, 3, 3)))
     # At the boundary the target's critic reads the prediction of E_target(tau^k).
     x_next, x_next_pi = core._target_inputs(state, batch)
-    code_next = np.asarray(core.predictions(state.model, zbar_next))
+    code_next = np.asarray(core.critic_code(state.model, zbar_next))
     np.testing.assert_allclose(np.asarray(x_next[:, 2, -width:]), code_next, rtol=1e-6)
     np.testing.assert_allclose(np.asarray(x_next_pi[:, 2, -3:]), np.asarray(zbar_next),
                                rtol=1e-6)

@@ -166,6 +166,11 @@ class SACCore:
     def _act_latent(self, model: Params, norm: Normaliser, window: Window) -> jax.Array:
         return jnp.zeros((0,))
 
+    def critic_code(self, model: Params, z: jax.Array) -> jax.Array:
+        """What the critic reads of latents ``z`` [B, L] beside the state: ``z`` itself (a
+        variant in :mod:`lili.contrib` reads what ``z`` predicts instead)."""
+        return z
+
     # -- one gradient update ---------------------------------------------------------------
     def _with_z(self, x: jax.Array, z: jax.Array) -> jax.Array:
         """Append the per-interaction latent [B, L] to per-transition inputs [B, M, .]."""

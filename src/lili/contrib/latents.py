@@ -246,8 +246,8 @@ class PredictionCriticCore(VariantCore):
     def _input_dims(self) -> tuple[int, int]:
         return self.x_dim - self.latent_dim + PROBES * (self.obs_dim + 1), self.x_dim
 
-    def predictions(self, model: Params, z: jax.Array) -> jax.Array:
-        """The critic's code of latents ``z`` (:func:`decoder_predictions`)."""
+    def critic_code(self, model: Params, z: jax.Array) -> jax.Array:
+        """The decoder's predictions from ``z`` (:func:`decoder_predictions`)."""
         return decoder_predictions(self.decoder, model["decoder"], z, self.probe_obs,
                                    self.probe_act)
 
@@ -256,14 +256,14 @@ class PredictionCriticCore(VariantCore):
         _, zbar, zbar_next = self._latents(state.model, state.target, norm, batch)
         zbar, zbar_next = sg(zbar), sg(zbar_next)
         x_next = self._next_x(norm, batch, zbar, zbar_next)
-        code = self.predictions
+        code = self.critic_code
         return self._next_x(norm, batch, code(state.model, zbar),
                             code(state.model, zbar_next)), x_next
 
     def _inputs(self, model: Params, state: AgentState, batch: Batch):
         z, _, _ = self._latents(model, state.target, state.norm, batch)
         x = self._x(state.norm, batch["obs"], batch["t"])
-        return self._with_z(x, self.predictions(model, sg(z))), self._with_z(x, sg(z)), z
+        return self._with_z(x, self.critic_code(model, sg(z))), self._with_z(x, sg(z)), z
 
 
 class SetEncoderCore(VariantCore):
