@@ -59,7 +59,6 @@ Whys = dict[tuple[str, str], Why]
 """(preset, claim statement) -> its explanation."""
 
 
-
 def _known() -> dict[str, tuple[Claim, ...]]:
     """The claims an entry may name, by preset: :data:`CLAIMS`, with the ``influence`` goals on
     every env of the suite (the results page checks them on Point Mass too, against the Point
