@@ -8,7 +8,9 @@
   execute it.
 - :mod:`~lili.experiments.results`: the preset's report (through :mod:`lili.report`).
 - :mod:`~lili.experiments.claims`: the paper's claims per preset (and the influence suite's
-  goals), checked PASS / FAIL / too few seeds (``lili reproduce NAME --check-only``).
+  goals), checked PASS / FAIL / too few seeds (``lili reproduce NAME --check-only``);
+  :mod:`~lili.experiments.why`: why each FAIL of the committed records fails (the
+  explanations beside the sources file, listed under each claim table).
 - :mod:`~lili.experiments.page`: ``lili results``, the results page ``docs/results.md`` from
   the committed records; its influence-suite section is
   :mod:`~lili.experiments.influence_page`, and :mod:`~lili.experiments.provenance` words

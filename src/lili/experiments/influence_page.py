@@ -37,6 +37,7 @@ from lili.experiments.provenance import (
     setting,
     sources_markdown,
 )
+from lili.experiments.why import Whys, why_markdown
 from lili.report.files import Run
 from lili.report.stats import final_performance, gap_share, held_share, iqm, iqm_ci
 from lili.report.style import algo_label
@@ -140,7 +141,8 @@ def _table(rows: list[dict[str, Any]]) -> str:
 
 
 def _env_section(env: str, part: Preset, evidence: Evidence,
-                 variants: tuple[Preset, Evidence] | None) -> tuple[str, list]:
+                 variants: tuple[Preset, Evidence] | None,
+                 whys: Whys | None) -> tuple[str, list]:
     rows = influence_rows(env, part, evidence, variants)
     results = [(part, check_claim(part, claim, evidence)) for claim in influence_goals(env)]
     held = HELD.get(env)
@@ -161,13 +163,16 @@ def _env_section(env: str, part: Preset, evidence: Evidence,
         reproduce += " Reproduce: " + "; ".join(f"`{c}`" for c in commands) + "."
     text = (f"### {env}\n\n{_table(rows)}\n{learned}{held_text}{reproduce}\n\n"
             f"{claims_markdown(results, with_part=False, rules=False)}")
-    return text, results
+    why = "" if whys is None else why_markdown(results, whys)
+    return text + (f"\n{why}" if why else ""), results
 
 
-def influence_section(locate: Locate, paper_evidence: Evidence) -> tuple[str, list]:
+def influence_section(locate: Locate, paper_evidence: Evidence,
+                      whys: Whys | None = None) -> tuple[str, list]:
     """The section's markdown and its claim results: one table and the goals per env of the
     suite. ``locate`` finds the ``influence`` preset's records; ``paper_evidence`` holds the
-    paper's parts' runs (Point Mass's rows are that section's runs, not read twice)."""
+    paper's parts' runs (Point Mass's rows are that section's runs, not read twice);
+    ``whys``: the explanations of FAILs listed under each env's goals (none: no list)."""
     paper, contrib = PRESETS["paper"].includes, PRESETS[VARIANTS]
     sections, results = [], []
     for env in SUITE:
@@ -178,7 +183,7 @@ def influence_section(locate: Locate, paper_evidence: Evidence) -> tuple[str, li
             on_env = contrib.for_env(env)
             found = load_evidence(on_env, locate)  # LILI's row: the core's records
             variants = (on_env, {k: v for k, v in found.items() if k[1] in CONTRIB_ALGOS})
-        text, mine = _env_section(env, part, evidence, variants)
+        text, mine = _env_section(env, part, evidence, variants, whys)
         sections.append(text)
         results += mine
     influence = PRESETS["influence"]

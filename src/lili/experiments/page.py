@@ -36,6 +36,7 @@ from lili.experiments.provenance import (
     setting,
     sources_markdown,
 )
+from lili.experiments.why import Whys, load_why, why_beside, why_markdown
 from lili.report.files import Run
 from lili.report.paper import PAPER_TABLES
 from lili.report.stats import iqm_ci, summarize
@@ -175,7 +176,7 @@ def _plot_env(part: Preset, evidence: Evidence, rows: list[dict[str, Any]], path
 
 
 def _section(part: Preset, locate, evidence: Evidence, figures: Path | None,
-             rel: str) -> tuple[str, list]:
+             rel: str, whys: Whys | None) -> tuple[str, list]:
     if part.kind == "table":
         table, rows = _variant_table(part, evidence)
     else:
@@ -194,6 +195,7 @@ def _section(part: Preset, locate, evidence: Evidence, figures: Path | None,
     text = (f"## {part.title}\n\nPaper: {part.where}. Env: {envs}. Ours: {part.metric}.\n\n"
             f"{table}\n{figure}**Claims**\n\n"
             f"{claims_markdown(results, with_part=False, rules=False)}\n"
+            f"{_why(results, whys)}"
             f"**Evidence** (committed records)\n\n{sources_markdown(part, locate)}\n"
             "**Reproduce** (retrains these runs into `runs/reproduce`; the last command "
             "checks the claims)\n\n```\n" + "\n".join(commands)
@@ -201,11 +203,20 @@ def _section(part: Preset, locate, evidence: Evidence, figures: Path | None,
     return text, results
 
 
+def _why(results: list, whys: Whys | None) -> str:
+    """The claim table's "Why the FAILs fail" list and a blank line (nothing where there is no
+    explanations' file or nothing FAILs)."""
+    text = "" if whys is None else why_markdown(results, whys)
+    return f"{text}\n" if text else ""
+
+
 def results_markdown(sources: str | Path = DEFAULT_SOURCES,
                      figures: str | Path | None = None, rel: str = "results") -> str:
     """The page's markdown from the records ``sources`` names; figures are written into
     ``figures`` (none when None) and linked as ``rel/<preset>.png``."""
     locate = load_sources(sources)
+    why_file = why_beside(sources)
+    whys = load_why(why_file) if why_file.is_file() else None  # checked before any figure
     paper = PRESETS["paper"]
     evidence = load_evidence(paper, locate)
     fig_dir = Path(figures) if figures is not None else None
@@ -214,10 +225,10 @@ def results_markdown(sources: str | Path = DEFAULT_SOURCES,
     sections, all_results = [], []
     for name in paper.includes:
         part = PRESETS[name]
-        text, results = _section(part, locate, evidence, fig_dir, rel)
+        text, results = _section(part, locate, evidence, fig_dir, rel, whys)
         sections.append(text)
         all_results += results
-    influence, _ = influence_section(locate, evidence)
+    influence, _ = influence_section(locate, evidence, whys)
     counts = {v: sum(r.verdict == v for _, r in all_results) for v in VERDICTS}
     summary = claims_markdown(all_results, rules=False)
     head = (
@@ -232,7 +243,11 @@ def results_markdown(sources: str | Path = DEFAULT_SOURCES,
         "confidence interval, beside mean ± s.e.; P(>) is the probability of improvement "
         "(Agarwal et al. 2021) with its stratified bootstrap interval. 'Setting' names what a "
         "row's runs changed from the preset (`lili reproduce --set` / `--interactions`). "
-        "The lab journal behind these records is `docs/journal/2026-11-to-12.md`.\n\n"
+        "The lab journal behind these records is `docs/journal/2026-11-to-12.md`."
+        + ("" if whys is None else " Under each claim table, \"Why the FAILs fail\" gives "
+           "each FAIL the experiment that says why, in words, or says that it is not yet "
+           f"explained (`{why_file.as_posix()}`).")
+        + "\n\n"
         f"**{counts['PASS']} of the paper's {len(all_results)} claims PASS, "
         f"{counts['FAIL']} FAIL, {counts['too few seeds']} have too few seeds.** {RULE_NOTE} "
         "The same table, from the same records, without writing anything: `lili reproduce "

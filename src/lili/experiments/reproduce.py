@@ -247,11 +247,16 @@ def reproduce(name: str, out: str | Path = "runs/reproduce", seeds: int | None =
 def _check_only(preset, out: str | Path, sources: str | Path | None,
                 say: Callable[[str], None]) -> dict[str, Any]:
     from lili.experiments.claims import check_claims, claims_markdown, load_sources, out_layout
+    from lili.experiments.why import load_why, why_beside, why_markdown
 
     if sources is None and not Path(out).is_dir():
         raise ValueError(f"--check-only: --out {out} is not a folder; allowed: a folder of "
                          "runs in the preset layout, or --sources FILE")
     locate = load_sources(sources) if sources is not None else out_layout(out)
+    # The explanations of the FAILs of the records a sources file names sit beside it; an
+    # --out folder is the user's own runs, which they do not explain.
+    why_file = None if sources is None else why_beside(sources)
+    whys = load_why(why_file) if why_file is not None and why_file.is_file() else None
     results = check_claims(preset, locate)
     if not results:
         say(f"{preset.name}: states no claim of the paper (not a paper item); nothing to check")
@@ -259,6 +264,9 @@ def _check_only(preset, out: str | Path, sources: str | Path | None,
     say(f"## Claims of `{preset.name}`, checked against "
         f"{sources if sources is not None else out} (nothing trained)\n")
     say(claims_markdown(results))
+    why = "" if whys is None else why_markdown(results, whys, with_part=bool(preset.includes))
+    if why:
+        say(why)
     return {"claims": results}
 
 
