@@ -1,5 +1,5 @@
 # Over 400 lines: a parser and a handler per subcommand, each checking its input before writing.
-"""Command line: ``lili train | eval | report | check-env | play``.
+"""Command line: ``lili train | eval | report | reproduce | results | check-env | play``.
 
 Every bad input ends with one line ``lili: error: ...`` naming the value and what is allowed,
 exit code 2, and nothing overwritten.
