@@ -174,14 +174,17 @@ def test_sources_file_points_at_run_folders(tmp_path: Path) -> None:
     ("air-hockey:\n  - path: missing\n", "is not a folder"),
     ("air-hockey:\n  - path: runs\n    algos: [slac]\n", "algos ['slac'] are not run"),
     ("air-hockey:\n  - {path: runs, colour: red}\n", "is invalid; allowed: {path"),
+    ("air-hockey:\n  - [path: runs\n", "is not valid YAML: line 3, column 1"),
+    (b"air-hockey: \xff\n", "is not UTF-8 text; allowed: a YAML file"),
 ])
-def test_bad_sources_file(tmp_path: Path, capsys, text: str, message: str) -> None:
+def test_bad_sources_file(tmp_path: Path, capsys, text: str | bytes, message: str) -> None:
     (tmp_path / "runs").mkdir()
     sources = tmp_path / "sources.yaml"
-    sources.write_text(text)
+    sources.write_bytes(text if isinstance(text, bytes) else text.encode())
     assert main(["reproduce", "paper", "--check-only", "--sources", str(sources)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("lili: error: --sources") and message in err
+    assert len(err.strip().splitlines()) == 1, err
 
 
 def test_check_only_refuses_other_modes(tmp_path: Path, capsys) -> None:

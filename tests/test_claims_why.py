@@ -86,10 +86,28 @@ ENTRY = ("    {state: explained, finding: Random wanders in the middle., journal
     (f"  air-hockey:\n    {RANDOM}:\n  " + ENTRY.replace("finding: Random wanders in the "
                                                          "middle., ", ""),
      "finding is missing"),
+    (f"  air-hockey:\n    {RANDOM}:\n  " + ENTRY.replace("state: explained",
+                                                         "state: explained, next: [1]"),
+     "next [1] is invalid; allowed: the experiment that would tell"),
 ])
 def test_a_bad_entry_is_one_clear_error(tmp_path: Path, claims: str, message: str) -> None:
     with pytest.raises(ValueError, match=re.escape(message)) as err:
         load_why(_why_file(tmp_path, claims, JOURNAL.replace("../../", str(ROOT) + "/")))
+    assert str(tmp_path / WHY_FILE) in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("text, message", [
+    (b"claims:\n  air-hockey: [1\n", "is not valid YAML: line 3, column 1"),
+    (b"claims: {}\n# \xff\n", "is not UTF-8 text"),
+    (f"claims:\n  air-hockey:\n    {RANDOM}: {{}}\n    {RANDOM}: {{}}\n".encode(),
+     "is given twice"),
+    (b"journal: journal.md\nclaims: {}\n", "journal.md cannot be read"),
+])
+def test_an_unreadable_file_is_one_clear_error(tmp_path: Path, text: bytes, message: str) -> None:
+    (tmp_path / "journal.md").write_bytes(b"# \xff\n")  # not UTF-8
+    (tmp_path / WHY_FILE).write_bytes(text)
+    with pytest.raises(ValueError, match=re.escape(message)) as err:
+        load_why(tmp_path / WHY_FILE)
     assert str(tmp_path / WHY_FILE) in str(err.value) and "\n" not in str(err.value)
 
 

@@ -40,8 +40,8 @@ from pathlib import Path
 from typing import Any, NamedTuple
 
 import numpy as np
-import yaml
 
+from lili.config import read_yaml
 from lili.experiments.presets import (
     HISTORY,
     HISTORY_BOUNDED,
@@ -412,10 +412,7 @@ def load_sources(path: str | Path) -> Locate:
     does not exist) before any run is read.
     """
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as e:
-        raise ValueError(f"--sources {path}: cannot read it ({e})") from None
+    data = read_yaml(path, "--sources")  # one line for a missing, non-UTF-8 or malformed file
     if not isinstance(data, dict):
         raise ValueError(f"--sources {path}: expected a mapping of group folders to lists of "
                          "{path, algos, note}")

@@ -27,8 +27,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import yaml
-
+from lili.config import read_yaml
 from lili.experiments.claims import CLAIMS, Claim, ClaimResult, influence_goals
 from lili.experiments.presets import Preset
 
@@ -85,8 +84,13 @@ def why_beside(sources: str | Path) -> Path:
     return Path(sources).parent / WHY_FILE
 
 
-def _headings(journal: Path) -> set[str]:
-    text = journal.read_text(encoding="utf-8")
+def _headings(path: Path, journal: Path) -> set[str]:
+    """The headings of ``journal`` (named by the explanations file ``path``)."""
+    try:
+        text = journal.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise ValueError(f"{path}: journal {journal} cannot be read ({e}); allowed: a UTF-8 "
+                         "markdown file") from None
     return {m.group(1).strip() for m in re.finditer(r"^#+ (.+)$", text, re.MULTILINE)}
 
 
@@ -129,7 +133,9 @@ def _entry(path: Path, where: str, entry: object, headings: set[str] | None,
         if not (path.parent / record).exists():
             raise bad(f"records {path.parent / record} do not exist")
     nxt = entry.get("next", "")
-    if not isinstance(nxt, str) or (entry["state"] != "explained" and not nxt.strip()):
+    if not isinstance(nxt, str):
+        raise bad(f"next {nxt!r} is invalid; allowed: the experiment that would tell, in words")
+    if entry["state"] != "explained" and not nxt.strip():
         raise bad(f"state {entry['state']!r} needs 'next': the experiment that would tell")
     return Why(entry["state"], " ".join(entry["finding"].split()), entry["command"].strip(),
                journal, journal_file, tuple((path.parent / r).as_posix() for r in records),
@@ -153,10 +159,7 @@ def load_why(path: str | Path) -> Whys:
     journal lacks, a path that does not exist, a missing field).
     """
     path = Path(path)
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as e:
-        raise ValueError(f"{path}: cannot read it ({e})") from None
+    data = read_yaml(path, "explanations file")  # one line for non-UTF-8 or malformed YAML
     if not isinstance(data, dict) or set(data) - {"journal", "claims"} \
             or not isinstance(data.get("claims"), dict):
         raise ValueError(f"{path}: expected a mapping {{journal: PATH, claims: {{PRESET: "
@@ -166,8 +169,8 @@ def load_why(path: str | Path) -> Whys:
         journal = path.parent / str(data["journal"])
         if not journal.is_file():
             raise ValueError(f"{path}: journal {journal} is not a file")
-        headings, journal_file = _headings(journal), os.path.normpath(journal).replace(os.sep,
-                                                                                        "/")
+        headings = _headings(path, journal)
+        journal_file = os.path.normpath(journal).replace(os.sep, "/")
     whys: Whys = {}
     for preset, entries in data["claims"].items():
         if preset not in _KNOWN:
