@@ -37,11 +37,11 @@ import numpy as np
 from _results import check_result_name, write_result
 
 import lili.envs  # noqa: F401  (registers the envs)
-from lili.agents import CheckpointError, load_agent
+from lili.agents import load_agent
 from lili.buffer import InteractionBuffer
-from lili.envs.influence.flee import SLOT, SLOTS, end_slot, fled
-from lili.envs.influence.line import move_to
-from lili.runs import latest_checkpoint
+from lili.envs.influence.flee import SLOT, SLOTS, SPEED, end_slot, fled
+from lili.envs.influence.line import move_to, moved
+from lili.play.policy import agent_file_for_run
 
 ENV_ID = "lili/InfluenceFlee-v0"
 H = 4
@@ -66,11 +66,11 @@ def setup(k: int, k_end: int) -> dict[str, np.ndarray]:
     g, x = SLOT * k, 0.0
     rows: dict[str, list] = {"obs": [], "act": [], "rew": [], "next_obs": []}
     for t in range(H):
-        left = H - 1 - t  # steps after this one, each 0.25 at most
+        left = H - 1 - t  # steps after this one, each one slot at most
         target = g if left else SLOT * k_end
         target = float(np.clip(target, SLOT * (k_end - left), SLOT * (k_end + left)))
-        a = float(move_to(x, target, SLOT)[0])
-        x_next = float(np.clip(x + SLOT * a, -1.0, 1.0))
+        a = float(move_to(x, target, SPEED)[0])
+        x_next = moved(x, a, SPEED)
         for key, v in (("obs", [x]), ("act", [a]), ("rew", -abs(x_next - g)),
                        ("next_obs", [x_next])):
             rows[key].append(v)
@@ -85,9 +85,9 @@ class Probe:
 
     def __init__(self, agent) -> None:
         if not agent.core.uses_latent:
-            raise SystemExit(f"{agent.algo}: the probe needs an agent with a latent")
+            raise ValueError(f"{agent.algo}: the probe needs an agent with a latent")
         if agent.core.horizon != H:
-            raise SystemExit(f"the probe scripts interactions of {H} steps (Flee's default "
+            raise ValueError(f"the probe scripts interactions of {H} steps (Flee's default "
                              f"horizon); this agent was trained at horizon {agent.core.horizon}")
         self.agent, self.core, self.state = agent, agent.core, agent.state
         self.xs = np.linspace(-1.0, 1.0, 17, dtype=np.float32)
@@ -114,7 +114,7 @@ class Probe:
         s = jnp.broadcast_to(s, (len(self.acts), s.shape[-1]))
         q = np.asarray(self.core.critic.apply(st.model["critic"], s,
                                               jnp.asarray(self.acts)[:, None]).min(0))
-        ends = np.array([end_slot(float(np.clip(x + SLOT * a, -1, 1))) for a in self.acts])
+        ends = np.array([end_slot(moved(x, a, SPEED)) for a in self.acts])
         return {int(e): float(q[ends == e].max()) for e in np.unique(ends)}
 
     def answer(self, k: int, k_end: int) -> dict:
@@ -123,9 +123,9 @@ class Probe:
         x, state = 0.0, acting
         for _ in range(H - 1):
             a, state = self.agent.predict(np.array([x], np.float32), state)
-            x = float(np.clip(x + SLOT * float(a[0]), -1.0, 1.0))
+            x = moved(x, float(a[0]), SPEED)
         a, _ = self.agent.predict(np.array([x], np.float32), state)
-        stop = end_slot(float(np.clip(x + SLOT * float(a[0]), -1.0, 1.0)))
+        stop = end_slot(moved(x, float(a[0]), SPEED))
         k_next = fled(k, k_end)
         q = self.critic_ends(x, z)
         greedy, infl = k_next, influencer_end(k_next)
@@ -133,6 +133,20 @@ class Probe:
                 "decoded": self.decoded_slot(z), "policy_end": stop,
                 "critic_prefers_influencer": (None if greedy == infl or infl not in q
                                               or greedy not in q else q[infl] > q[greedy])}
+
+
+def load(run: Path) -> tuple[Path, Probe]:
+    """(checkpoint folder, probe) of a Flee run folder's newest checkpoint; one error line
+    (SystemExit) when ``run`` is no run folder, has no checkpoint, is a run of another env or
+    holds an agent the probe cannot ask."""
+    try:
+        path, cfg = agent_file_for_run(run)
+        if cfg["env"] != ENV_ID:
+            raise ValueError(f"{run} is a run of {cfg['env']!r}; allowed: a run of {ENV_ID}")
+        env = gym.make(ENV_ID, **(cfg["env_kwargs"] or {}))
+        return path.parent, Probe(load_agent(path, env))
+    except ValueError as e:  # CheckpointError included
+        raise SystemExit(f"boundary_probe.py: {e}") from None
 
 
 def final_return(run: Path) -> float | None:
@@ -163,15 +177,10 @@ def main() -> None:
     parser.add_argument("--name", default="flee_boundary", help="results/<name>.json")
     args = parser.parse_args()
     check_result_name(parser, args.name)
-    env = gym.make(ENV_ID)
+    probes = [(run, *load(run)) for run in args.runs]  # every run checked before any is probed
     results = []
-    for run in args.runs:
-        try:
-            ckpt, _ = latest_checkpoint(run)
-        except CheckpointError as e:
-            raise SystemExit(str(e)) from None
-        agent = load_agent(ckpt / "agent.msgpack", env)
-        probe = Probe(agent)
+    for run, ckpt, probe in probes:
+        agent = probe.agent
         answers = [probe.answer(k, e) for k in range(-SLOTS, SLOTS + 1)
                    for e in range(-SLOTS, SLOTS + 1) if abs(e - k) <= 1]
         results.append({"run": str(run), "checkpoint": ckpt.name, "algo": agent.algo,
@@ -183,14 +192,16 @@ def main() -> None:
                                              for g in GROUPS) + ".",
              "", "| run | return | " + " | ".join(GROUPS) + " |",
              "|---|---:|" + "---|" * len(GROUPS)]
-    base = Path(os.path.commonpath([str(r) for r in args.runs]))
+    # Resolved: commonpath refuses a mix of relative and absolute paths.
+    base = Path(os.path.commonpath([str(r.resolve()) for r in args.runs]))
     for r in results:
         cells = [" / ".join(f"{s[key]:.2f}" for key in ("decoder_right", "policy_greedy",
                                                           "policy_influencer",
                                                           "critic_prefers_influencer"))
                  for s in (r["summary"][g] for g in GROUPS)]
         ret = "n/a" if r["final_return"] is None else f"{r['final_return']:.3f}"
-        name = Path(r["run"]).relative_to(base) if len(results) > 1 else Path(r["run"]).name
+        run = Path(r["run"])
+        name = run.resolve().relative_to(base) if len(results) > 1 else run.name
         lines.append(f"| {name} ({r['checkpoint']}) | {ret} | "
                      + " | ".join(cells) + " |")
     write_result(args.name, "\n".join(lines), runs=results)

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import re
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 
 BENCH = Path(__file__).resolve().parent.parent / "benchmarks"
 
@@ -327,11 +329,14 @@ def test_boundary_probe_on_a_saved_agent(tmp_path: Path, monkeypatch) -> None:
 
     script = _script("boundary_probe")
     monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
-    def saved(algo: str, run: Path) -> Path:  # a checkpoint as a run folder holds it
-        make_agent(algo, "lili/InfluenceFlee-v0", seed=0).save(
-            run / "checkpoints" / "ckpt_0" / "agent.msgpack")
+    def saved(algo: str, run: Path, env: str = "lili/InfluenceFlee-v0") -> Path:
+        """A run folder as `lili train` leaves it, as far as the probe reads it."""
+        make_agent(algo, env, seed=0).save(run / "checkpoints" / "ckpt_0" / "agent.msgpack")
         (run / "checkpoints" / "latest.json").write_text(
             json.dumps({"checkpoint": "ckpt_0", "interactions": 0}))
+        (run / "config.yaml").write_text(yaml.safe_dump({
+            "env": env, "env_kwargs": {}, "algo": algo, "seed": 0, "interactions": 0,
+            "agent": {}}))
         return run
 
     run = saved("lili", tmp_path / "run")
@@ -343,6 +348,16 @@ def test_boundary_probe_on_a_saved_agent(tmp_path: Path, monkeypatch) -> None:
     assert {r["group"] for r in row["answers"]} == {"flees", "toward home", "home next"}
     for r in row["answers"]:
         assert -4 <= r["policy_end"] <= 4 and -4 <= r["decoded"] <= 4
-    monkeypatch.setattr("sys.argv", ["x", str(saved("sac", tmp_path / "sac")), "--name", "b"])
-    with pytest.raises(SystemExit, match="needs an agent with a latent"):
-        script.main()
+    # Every run is checked before any is probed: one line naming the bad one, nothing written.
+    (tmp_path / "b.json").unlink()
+    bad = {"sac": (saved("sac", tmp_path / "sac"), "sac: the probe needs an agent with a latent"),
+           "switch": (saved("lili", tmp_path / "switch", "lili/InfluenceSwitch-v0"),
+                      "is a run of 'lili/InfluenceSwitch-v0'; allowed: a run of "
+                      "lili/InfluenceFlee-v0"),
+           "empty": (tmp_path / "empty", "is not a run folder (config.yaml is missing)")}
+    for folder, message in bad.values():
+        monkeypatch.setattr("sys.argv", ["x", str(run), str(folder), "--name", "b"])
+        with pytest.raises(SystemExit, match=re.escape(message)) as err:
+            script.main()
+        assert str(err.value).startswith("boundary_probe.py: ") and "\n" not in str(err.value)
+        assert not (tmp_path / "b.json").exists()

@@ -62,8 +62,8 @@ from gymnasium import spaces
 
 from lili.envs.influence.line import LineEnv, check_horizon, move_to
 
-__all__ = ["InfluenceFleeEnv", "FleePartner", "SLOT", "SLOTS", "HOME", "end_slot", "fled",
-           "SCRIPTED", "KNOWN_RETURNS"]
+__all__ = ["InfluenceFleeEnv", "FleePartner", "SLOT", "SPEED", "SLOTS", "HOME", "end_slot",
+           "fled", "SCRIPTED", "KNOWN_RETURNS"]
 
 SLOT = 0.25  # the distance between slots
 SPEED = SLOT  # one slot per step: four steps reach the outermost slots

@@ -16,7 +16,7 @@ from gymnasium import spaces
 from lili.envs.core import RepeatedInteractionEnv
 from lili.envs.partners import check_probability
 
-__all__ = ["LineEnv", "check_horizon", "check_probability", "move_to"]
+__all__ = ["LineEnv", "check_horizon", "check_probability", "move_to", "moved"]
 
 
 def check_horizon(horizon: Any, low: int) -> int:
@@ -29,6 +29,12 @@ def check_horizon(horizon: Any, low: int) -> int:
 def move_to(x: float, target: float, speed: float) -> np.ndarray:
     """The action that moves from ``x`` toward ``target`` as fast as allowed, stopping on it."""
     return np.array([np.clip((target - x) / speed, -1.0, 1.0)], np.float32)
+
+
+def moved(x: float, action: float, speed: float) -> float:
+    """Where one step of ``action`` (clipped to [-1, 1]) takes the ego from ``x``: the line's
+    dynamics, which scripts that replay an interaction read here too."""
+    return float(np.clip(x + speed * float(np.clip(action, -1.0, 1.0)), -1.0, 1.0))
 
 
 class LineEnv(RepeatedInteractionEnv):
@@ -54,7 +60,7 @@ class LineEnv(RepeatedInteractionEnv):
 
     def _step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool]:
         self.last_action = float(np.clip(action[0], -1.0, 1.0))
-        self.x = float(np.clip(self.x + self.speed * self.last_action, -1.0, 1.0))
+        self.x = moved(self.x, self.last_action, self.speed)
         return np.array([self.x], np.float32), -abs(self.x - self.goal()), False
 
     def render(self) -> np.ndarray | None:
