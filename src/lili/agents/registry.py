@@ -62,7 +62,7 @@ TABLE: tuple[Algo, ...] = (
     Algo("oracle-last", "lili.agents.oracle", SAC_FIELDS),
     Algo("oracle", "lili.agents.oracle", SAC_FIELDS, paper=True),
     # Variants of LILI kept out of the core (lili.contrib, README "Contrib variants"); these
-    # five measured no gain.
+    # five measured no gain on Drift.
     Algo("lili-categorical", "lili.contrib.latents", LATENT_FIELDS),
     Algo("lili-quantised", "lili.contrib.latents", LATENT_FIELDS),
     Algo("lili-bottleneck", "lili.contrib.latents", LATENT_FIELDS),
