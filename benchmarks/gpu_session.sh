@@ -80,12 +80,14 @@ for part in $PARTS; do
                "critic-ln, variants" >&2; exit 2;;
     esac
 done
-mkdir -p "$OUT"
 LOG="$OUT/log.txt"
 START=$(date +%s)
-source benchmarks/gpu_env.sh
-RUNS=$(mktemp -d)
-mkdir -p "$RUNS/logs"
+if [ "${DRY:-0}" != 1 ]; then  # a dry run writes nothing and installs nothing
+    mkdir -p "$OUT"
+    source benchmarks/gpu_env.sh
+    RUNS=$(mktemp -d)
+    mkdir -p "$RUNS/logs"
+fi
 if [ "${SMOKE:-0}" = 1 ]; then
     # Learning after a 3-interaction warm-up, small nets: every path of the program runs. Only
     # fields every algo here reads (a --config is checked against the algo).

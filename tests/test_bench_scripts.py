@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
 import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -361,3 +363,28 @@ def test_boundary_probe_on_a_saved_agent(tmp_path: Path, monkeypatch) -> None:
             script.main()
         assert str(err.value).startswith("boundary_probe.py: ") and "\n" not in str(err.value)
         assert not (tmp_path / "b.json").exists()
+
+
+def _gpu_script(tmp_path: Path, name: str, **env: str) -> subprocess.CompletedProcess:
+    return subprocess.run(["bash", str(BENCH / name)], capture_output=True, text=True,
+                          timeout=60, env={**os.environ, "OUT": str(tmp_path / "out"), **env})
+
+
+def test_gpu_session_dry_run_lists_each_part_and_writes_nothing(tmp_path: Path) -> None:
+    """The prepared GPU call, without a GPU: DRY=1 prints its `lili train` lines only."""
+    out = _gpu_script(tmp_path, "gpu_session.sh", DRY="1")
+    lines = out.stdout.splitlines()
+    assert out.returncode == 0 and len(lines) == 12, out.stdout + out.stderr
+    assert all(x.startswith("lili train point-mass --algo ") and x.endswith("--backend jax")
+               for x in lines)
+    assert sum("--algo lili-critic-ln --seeds" in x for x in lines) == 2
+    assert not (tmp_path / "out").exists()
+    # The superseded script's modes are the session's parts.
+    old = _gpu_script(tmp_path, "gpu_records.sh", DRY="1").stdout.splitlines()
+    assert len(old) == 8 and {x.split()[4] for x in old} == {"sac", "oracle"}
+    old = _gpu_script(tmp_path, "gpu_records.sh", DRY="1", LONG="1").stdout.splitlines()
+    assert len(old) == 3 and all("--interactions 4000" in x for x in old)
+    bad = _gpu_script(tmp_path, "gpu_session.sh", DRY="1", PARTS="oracle bogus")
+    assert bad.returncode == 2 and bad.stdout == ""
+    assert bad.stderr.strip() == ("gpu_session.sh: PARTS names 'bogus'; allowed: oracle, sac, "
+                                  "long, collapse, critic-ln, variants")
