@@ -76,7 +76,9 @@ class Encoder(nn.Module):
         h = x
         for width in self.hidden:
             h = nn.relu(nn.Dense(width)(h))
-        pooled = self.head(pool(h, weight))  # before z's layer, which is then the last named
+        # The head's layers are made before z's, so that z's Dense keeps the last index: the
+        # core's parameter names do not depend on whether a variant's head adds layers.
+        pooled = self.head(pool(h, weight))
         return nn.Dense(self.latent_dim)(pooled)
 
     def head(self, pooled: jax.Array) -> jax.Array:

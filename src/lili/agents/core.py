@@ -168,7 +168,10 @@ class SACCore:
 
     def critic_code(self, model: Params, z: jax.Array) -> jax.Array:
         """What the critic reads of latents ``z`` [B, L] beside the state: ``z`` itself (a
-        variant in :mod:`lili.contrib` reads what ``z`` predicts instead)."""
+        variant in :mod:`lili.contrib` reads what ``z`` predicts instead). For readers of a
+        trained critic (``benchmarks/boundary_probe.py``): :meth:`_inputs` and
+        :meth:`_target_inputs` append ``z`` directly, so a variant that overrides this overrides
+        them too (as :class:`lili.contrib.latents.PredictionCriticCore` does)."""
         return z
 
     # -- one gradient update ---------------------------------------------------------------
