@@ -40,14 +40,17 @@ class Actor(nn.Module):
 
 
 class TwinCritic(nn.Module):
-    """Two independent Q networks evaluated together; returns shape [2, batch]."""
+    """Two independent Q networks evaluated together; returns shape [2, batch]. Each is
+    ``q_net(hidden, 1)``: an :class:`MLP` here, another network of that signature in a variant
+    (:class:`lili.contrib.nets.LayerNormMLP`)."""
 
     hidden: Sequence[int]
+    q_net: type[nn.Module] = MLP
 
     @nn.compact
     def __call__(self, x: jax.Array, a: jax.Array) -> jax.Array:
         q = nn.vmap(
-            MLP,
+            self.q_net,
             variable_axes={"params": 0},
             split_rngs={"params": True},
             in_axes=None,

@@ -167,11 +167,10 @@ class SACCore:
         return jnp.zeros((0,))
 
     def critic_code(self, model: Params, z: jax.Array) -> jax.Array:
-        """What the critic reads of latents ``z`` [B, L] beside the state: ``z`` itself (a
-        variant in :mod:`lili.contrib` reads what ``z`` predicts instead). For readers of a
-        trained critic (``benchmarks/boundary_probe.py``): :meth:`_inputs` and
-        :meth:`_target_inputs` append ``z`` directly, so a variant that overrides this overrides
-        them too (as :class:`lili.contrib.latents.PredictionCriticCore` does)."""
+        """What the critic reads of latents ``z`` [B, L] beside the state, in its Q input
+        (:meth:`_inputs`) and its target (:meth:`_target_inputs`) alike: ``z`` itself here (a
+        variant in :mod:`lili.contrib` reads what ``z`` predicts instead, and then gives its
+        width in :meth:`_input_dims`)."""
         return z
 
     # -- one gradient update ---------------------------------------------------------------
@@ -183,14 +182,15 @@ class SACCore:
     def _target_inputs(self, state: AgentState, batch: Batch) -> tuple[jax.Array, jax.Array]:
         """(critic input, actor input) at the next state of every transition ([B, M, .]).
 
-        SAC and LILI feed both the same x: the next observation and phase with z^k, or at the
-        last step the next interaction's first observation with the boundary mode's latent.
+        Both read the next observation and phase with z^k, or at the last step the next
+        interaction's first observation with the boundary mode's latent; the critic reads its
+        :meth:`critic_code` of that latent (SAC and LILI: the latent, so the same x).
         """
-        norm = state.norm
+        norm, code = state.norm, self.critic_code
         _, zbar, zbar_next = self._latents(state.model, state.target, norm, batch)
         zbar, zbar_next = sg(zbar), sg(zbar_next)
-        x_next = self._next_x(norm, batch, zbar, zbar_next)
-        return x_next, x_next
+        x_critic = self._next_x(norm, batch, code(state.model, zbar), code(state.model, zbar_next))
+        return x_critic, self._next_x(norm, batch, zbar, zbar_next)
 
     def _next_x(self, norm: Normaliser, batch: Batch, z: jax.Array,
                 z_next: jax.Array) -> jax.Array:
@@ -242,7 +242,7 @@ class SACCore:
         z, _, _ = self._latents(model, state.target, norm, batch)
         z_q = sg(z) + self.config.critic_to_encoder * (z - sg(z))
         x = self._x(norm, batch["obs"], batch["t"])
-        return self._with_z(x, z_q), self._with_z(x, sg(z)), z
+        return self._with_z(x, self.critic_code(model, z_q)), self._with_z(x, sg(z)), z
 
     def update(self, state: AgentState, batch: Batch,
                key: jax.Array) -> tuple[AgentState, dict[str, jax.Array]]:

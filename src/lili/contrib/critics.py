@@ -1,6 +1,7 @@
 """A variant of LILI's critic, not yet measured: ``lili-critic-ln``, LILI whose twin critic has a
-LayerNorm in every hidden layer (:class:`lili.contrib.nets.LayerNormTwinCritic`); everything
-else (encoder, decoder, actor, losses, targets, acting) is LILI's.
+LayerNorm in every hidden layer (:class:`lili.nets.TwinCritic` of two
+:class:`lili.contrib.nets.LayerNormMLP`); everything else (encoder, decoder, actor, losses,
+targets, acting) is LILI's.
 
 The candidate fix of issue 36 (item 4) for the critic divergence that the records show in the
 current core's one collapsing Point Mass seed (``docs/journal/2026-11-to-12.md``, "Point Mass
@@ -12,21 +13,22 @@ Mass, seeds 0-13). No options (``extra["lili-critic-ln"]`` may only be empty).
 
 from __future__ import annotations
 
-from lili.contrib.nets import LayerNormTwinCritic
+from lili.contrib.nets import LayerNormMLP
 from lili.contrib.variant import VariantCore, variant
+from lili.nets import TwinCritic
 
 __all__ = ["CriticLayerNormCore", "CriticLayerNormLILI"]
 
 
 class CriticLayerNormCore(VariantCore):
-    """LILI's core with :class:`~lili.contrib.nets.LayerNormTwinCritic` as its critic (and so as
-    its target critic, a Polyak copy of the same network)."""
+    """LILI's core whose twin critic's Q networks are :class:`~lili.contrib.nets.LayerNormMLP`
+    (and so its target critic's, a Polyak copy of the same network)."""
 
     algo = "lili-critic-ln"
 
     def _build(self) -> None:
         super()._build()
-        self.critic = LayerNormTwinCritic(self.config.hidden)
+        self.critic = TwinCritic(self.config.hidden, LayerNormMLP)
 
 
 CriticLayerNormLILI = variant(CriticLayerNormCore, "LILI with LayerNorm in its critic's hidden "

@@ -31,7 +31,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from lili.agents.base import AgentState, Normaliser, Params
+from lili.agents.base import Normaliser, Params
 from lili.agents.core import sg
 from lili.agents.latent import decoder_loss, window_part
 from lili.buffer import Batch, Window
@@ -250,20 +250,6 @@ class PredictionCriticCore(VariantCore):
         """The decoder's predictions from ``z`` (:func:`decoder_predictions`)."""
         return decoder_predictions(self.decoder, model["decoder"], z, self.probe_obs,
                                    self.probe_act)
-
-    def _target_inputs(self, state: AgentState, batch: Batch) -> tuple[jax.Array, jax.Array]:
-        norm = state.norm
-        _, zbar, zbar_next = self._latents(state.model, state.target, norm, batch)
-        zbar, zbar_next = sg(zbar), sg(zbar_next)
-        x_next = self._next_x(norm, batch, zbar, zbar_next)
-        code = self.critic_code
-        return self._next_x(norm, batch, code(state.model, zbar),
-                            code(state.model, zbar_next)), x_next
-
-    def _inputs(self, model: Params, state: AgentState, batch: Batch):
-        z, _, _ = self._latents(model, state.target, state.norm, batch)
-        x = self._x(state.norm, batch["obs"], batch["t"])
-        return self._with_z(x, self.critic_code(model, sg(z))), self._with_z(x, sg(z)), z
 
 
 class SetEncoderCore(VariantCore):

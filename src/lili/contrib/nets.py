@@ -1,7 +1,7 @@
 """Network pieces only :mod:`lili.contrib` uses: the straight-through one-hot, the nearest code
 of a codebook, an encoder that carries its codebook and one with an MLP after its pooling
-(:mod:`lili.contrib.latents`), and a twin critic with LayerNorm in its hidden layers
-(:mod:`lili.contrib.critics`)."""
+(:mod:`lili.contrib.latents`), and a Q network with LayerNorm in its hidden layers
+(:mod:`lili.contrib.critics`' twin critic)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import jax.numpy as jnp
 from lili.nets import Encoder
 
 __all__ = ["straight_through_one_hot", "nearest_code", "QuantisedEncoder", "SetEncoder",
-           "LayerNormMLP", "LayerNormTwinCritic"]
+           "LayerNormMLP"]
 
 
 def straight_through_one_hot(logits: jax.Array) -> jax.Array:
@@ -78,15 +78,3 @@ class LayerNormMLP(nn.Module):
             x = nn.relu(nn.LayerNorm()(nn.Dense(h)(x)))
         return nn.Dense(self.out)(x)
 
-
-class LayerNormTwinCritic(nn.Module):
-    """:class:`~lili.nets.TwinCritic` whose two Q networks are :class:`LayerNormMLP`; returns
-    shape [2, batch]."""
-
-    hidden: Sequence[int]
-
-    @nn.compact
-    def __call__(self, x: jax.Array, a: jax.Array) -> jax.Array:
-        q = nn.vmap(LayerNormMLP, variable_axes={"params": 0}, split_rngs={"params": True},
-                    in_axes=None, out_axes=0, axis_size=2)(self.hidden, 1)
-        return q(jnp.concatenate([x, a], -1))[..., 0]
