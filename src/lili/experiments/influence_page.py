@@ -163,7 +163,7 @@ def _env_section(env: str, part: Preset, evidence: Evidence,
         reproduce += " Reproduce: " + "; ".join(f"`{c}`" for c in commands) + "."
     text = (f"### {env}\n\n{_table(rows)}\n{learned}{held_text}{reproduce}\n\n"
             f"{claims_markdown(results, with_part=False, rules=False)}")
-    why = "" if whys is None else why_markdown(results, whys)
+    why = why_markdown(results, whys)
     return text + (f"\n{why}" if why else ""), results
 
 

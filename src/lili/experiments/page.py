@@ -206,7 +206,7 @@ def _section(part: Preset, locate, evidence: Evidence, figures: Path | None,
 def _why(results: list, whys: Whys | None) -> str:
     """The claim table's "Why the FAILs fail" list and a blank line (nothing where there is no
     explanations' file or nothing FAILs)."""
-    text = "" if whys is None else why_markdown(results, whys)
+    text = why_markdown(results, whys)
     return f"{text}\n" if text else ""
 
 

@@ -264,7 +264,7 @@ def _check_only(preset, out: str | Path, sources: str | Path | None,
     say(f"## Claims of `{preset.name}`, checked against "
         f"{sources if sources is not None else out} (nothing trained)\n")
     say(claims_markdown(results))
-    why = "" if whys is None else why_markdown(results, whys, with_part=bool(preset.includes))
+    why = why_markdown(results, whys, with_part=bool(preset.includes))
     if why:
         say(why)
     return {"claims": results}

@@ -202,11 +202,13 @@ def _line(why: Why) -> str:
     return f"{text} Measured by: {'; '.join(where)}."
 
 
-def why_markdown(results: Sequence[tuple[Preset, ClaimResult]], whys: Mapping[tuple[str, str],
-                 Why], with_part: bool = False) -> str:
+def why_markdown(results: Sequence[tuple[Preset, ClaimResult]],
+                 whys: Mapping[tuple[str, str], Why] | None, with_part: bool = False) -> str:
     """"Why the FAILs fail": a bullet per FAIL in ``results`` with its explanation, or "no
-    explanation recorded"; empty where nothing FAILs. ``with_part``: each bullet names its
-    preset (a table of several)."""
+    explanation recorded"; empty where nothing FAILs or there is no explanations' file
+    (``whys`` None). ``with_part``: each bullet names its preset (a table of several)."""
+    if whys is None:
+        return ""
     lines = []
     for part, result in results:
         if result.verdict != "FAIL":
