@@ -28,7 +28,6 @@ LONGEST_FIRST = (
     "test_reproduce.py",
     "test_many.py",
     "test_slac.py",
-    "test_ray.py",
     "test_jax_train.py",
     "test_lilac.py",
     "test_multiseed.py",

@@ -60,9 +60,11 @@ def _alone_and_together(algo: str, env: Any, n: int):
     return alone, agents, rows
 
 
-# LILI and LILAC (the baseline) are slow; LILI's group also meets its runs alone by default in
-# test_a_killed_group_resumes_to_the_same_numbers.
-@pytest.mark.parametrize("algo", ["sac", pytest.param("lili", marks=pytest.mark.slow),
+# LILI by default: its programs (one run, a group of three, on Driving (2D) with FAST) are the
+# ones test_a_killed_group_resumes_to_the_same_numbers trains through `lili train`, so this file
+# compiles them once. SAC's group meets its runs alone by default in
+# test_interactions_that_end_early_wait_for_the_group; SAC here and LILAC are slow.
+@pytest.mark.parametrize("algo", [pytest.param("sac", marks=pytest.mark.slow), "lili",
                                   pytest.param("lilac", marks=pytest.mark.slow)])
 def test_each_run_of_a_group_equals_the_run_trained_alone(algo):
     alone, agents, rows = _alone_and_together(algo, lambda: "lili/Driving2D-v0", 5)
