@@ -1,6 +1,7 @@
 """Many runs in one program (``lili.many``, ``lili train --seeds``): each run of a group equals
-the same run trained alone, interactions that end early wait, a killed group resumes to the
-same numbers, and a group that cannot share one program is refused before anything is written."""
+the same run trained alone, interactions that end early wait, the vmapped update block equals
+each seed's own, a killed group resumes to the same numbers, and a group that cannot share one
+program is refused before anything is written."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import csv
 from typing import Any
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 import yaml
@@ -15,13 +17,14 @@ from gymnasium import spaces
 
 from lili import cli
 from lili.agents import make_agent
+from lili.agents.multiseed import stack, unstack, update_blocks
 from lili.agents.registry import config_for
 from lili.buffer import _available_memory, buffer_nbytes
 from lili.config import AgentConfig
 from lili.envs import RepeatedInteractionEnv
 from lili.many import check_group, group_streams, train_many
 from lili.runs import RunLogger
-from lili.train import Stream, train
+from lili.train import Stream, interaction_keys, train
 
 FAST = {"hidden": [32, 32], "enc_hidden": [16, 16], "latent_dim": 3, "warmup_interactions": 3,
         "checkpoint_every": 4, "batch_interactions": 8, "per_interaction": 4,
@@ -60,9 +63,11 @@ def _alone_and_together(algo: str, env: Any, n: int):
     return alone, agents, rows
 
 
-# LILI and LILAC (the baseline) are slow; LILI's group also meets its runs alone by default in
-# test_a_killed_group_resumes_to_the_same_numbers.
-@pytest.mark.parametrize("algo", ["sac", pytest.param("lili", marks=pytest.mark.slow),
+# LILI by default: its programs (one run, a group of three, on Driving (2D) with FAST) are the
+# ones test_a_killed_group_resumes_to_the_same_numbers trains through `lili train`, so this file
+# compiles them once. SAC's group meets its runs alone by default in
+# test_interactions_that_end_early_wait_for_the_group; SAC here and LILAC are slow.
+@pytest.mark.parametrize("algo", [pytest.param("sac", marks=pytest.mark.slow), "lili",
                                   pytest.param("lilac", marks=pytest.mark.slow)])
 def test_each_run_of_a_group_equals_the_run_trained_alone(algo):
     alone, agents, rows = _alone_and_together(algo, lambda: "lili/Driving2D-v0", 5)
@@ -123,6 +128,39 @@ def test_interactions_that_end_early_wait_for_the_group():
     lengths = np.array([[r["length"] for r in run] for run in rows])
     # Within some interaction the runs ended at different steps, and some ended early.
     assert (lengths.min(0) != lengths.max(0)).any() and lengths.min() < 6
+
+
+# On the programs the tests above compiled: SAC's on the early-ending env, LILI's on Driving (2D).
+@pytest.mark.parametrize("algo", ["sac", "lili"])
+def test_update_blocks_match_each_seeds_own_block(algo):
+    """:func:`lili.agents.multiseed.update_blocks`, the vmapped block `train_many` runs, against
+    each seed's own :meth:`SACCore.block` for three blocks: the same losses and states."""
+    env = _EarlyEnd if algo == "sac" else (lambda: "lili/Driving2D-v0")
+    agents = [make_agent(algo, env(), config_for(algo, CONFIG), seed) for seed in SEEDS]
+    streams = [Stream.for_agent(a, a.env) for a in agents]
+    for a, s in zip(agents, streams, strict=True):
+        train(a, s, 4)  # warm-up, normaliser, one block each
+    core = agents[0].core
+    assert all(a.core == core for a in agents)  # same maths: one compiled program serves all
+    stacked = stack([a.state for a in agents])
+    arrays = stack([s.buffer.arrays for s in streams])
+    counts = jnp.array([s.count for s in streams], jnp.int32)
+    single = [a.state for a in agents]
+    for block in range(3):
+        keys = [interaction_keys(a.seed, 10 + block)[1] for a in agents]
+        stacked, metrics = update_blocks(core, stacked, arrays, counts, jnp.stack(keys))
+        for j, s in enumerate(streams):
+            single[j], m = core.jit_block(single[j], s.buffer.arrays, jnp.int32(s.count),
+                                          keys[j])
+            np.testing.assert_allclose(np.asarray(metrics["critic_loss"][j]),
+                                       np.asarray(m["critic_loss"]), rtol=1e-4, atol=1e-6)
+    for state, want in zip(unstack(stacked, len(SEEDS)), single, strict=True):
+        for got, x in zip(jax.tree_util.tree_leaves(state), jax.tree_util.tree_leaves(want),
+                          strict=True):
+            np.testing.assert_allclose(np.asarray(got), np.asarray(x), rtol=1e-4, atol=1e-5)
+    # The seeds really are different runs.
+    assert not np.allclose(np.asarray(jax.tree_util.tree_leaves(single[0].actor)[0]),
+                           np.asarray(jax.tree_util.tree_leaves(single[1].actor)[0]))
 
 
 def _csv_rows(path):

@@ -115,9 +115,11 @@ def test_env_kwarg_sets_every_run_and_is_checked(tmp_path: Path, capsys) -> None
 
 def test_env_kwarg_reaches_the_run(tmp_path: Path) -> None:
     out = tmp_path / "out"
+    # Two interactions, both before learning starts (warm-up 3): the check is the run's config
+    # and report, and a run that learns would only add compiling SAC's update.
     assert main(["reproduce", "influence", "--envs", "influence-drift", "--algos", "sac",
-                 "--quick", "--env-kwarg", "returns=0", "--out", str(out),
-                 "--no-progress"]) == 0
+                 "--quick", "--interactions", "2", "--env-kwarg", "returns=0", "--out",
+                 str(out), "--no-progress"]) == 0
     (config,) = out.rglob("config.yaml")
     assert yaml.safe_load(config.read_text())["env_kwargs"] == {"returns": 0}
     # The report does not pass for the preset's own beside the paper.
@@ -345,12 +347,35 @@ def test_quick_sweep_writes_runs_and_report(quick_sweep: Path) -> None:
     assert (report / "results.json").is_file()
 
 
-def test_finished_runs_are_skipped(quick_sweep: Path) -> None:
+def test_finished_runs_are_skipped(quick_sweep: Path, capsys) -> None:
     before = {p: p.stat().st_mtime_ns for p in quick_sweep.rglob("metrics.csv")}
-    proc = _reproduce(quick_sweep, "--algos", "sac", "lili")
-    log = proc.communicate(timeout=300)[0]
-    assert proc.returncode == 0 and "all 2 runs are done" in log, log
+    # In this process: the sweep's own command, with nothing to run, needs no fresh interpreter.
+    assert main(["reproduce", "point-mass", "--quick", "--algos", "sac", "lili", "--out",
+                 str(quick_sweep), "--no-progress"]) == 0
+    assert "all 2 runs are done" in capsys.readouterr().out
     assert {p: p.stat().st_mtime_ns for p in quick_sweep.rglob("metrics.csv")} == before
+
+
+# The Ray backend on a local Ray instance (127.0.0.1): the quick sweep's runs again, as Ray
+# tasks, give every number of the local runs. Its programs are the quick sweep's (the same
+# runs), so the run's compilation cache (tests/conftest.py) serves them. The default sweeps one
+# algo; the two-algo sweep (two runs at once) is slow.
+@pytest.mark.parametrize("algos", [("sac",), pytest.param(("sac", "lili"), marks=pytest.mark.slow)],
+                         ids=["sac", "sac-lili"])
+def test_a_ray_sweep_equals_the_local_one(quick_sweep: Path, tmp_path: Path,
+                                          algos: tuple[str, ...]) -> None:
+    pytest.importorskip("ray")
+    out = tmp_path / "ray"
+    proc = _reproduce(out, "--algos", *algos, "--ray", "--jobs", "2")
+    log = proc.communicate(timeout=900)[0]
+    assert proc.returncode == 0, log
+    assert "to run on Ray (local, 2 CPUs)" in log
+    for algo in algos:
+        run = Path("point-mass", "PointMass-v0", algo, "seed_0")
+        assert (out / run / "summary.json").is_file()
+        assert _numbers(out / run) == _numbers(quick_sweep / run) \
+            and len(_numbers(quick_sweep / run)) == 7
+    assert (out / "point-mass" / "report" / "results.md").is_file()
 
 
 @pytest.mark.slow

@@ -11,7 +11,7 @@ Usage: build one agent per seed, each with its own buffer, then::
     states, metrics = update_blocks(agents[0].core, states, arrays, counts, keys)
 
 Every seed's block is exactly the single-seed :meth:`SACCore.block` (the test suite checks
-that two seeds in one program agree with two single-seed runs to float tolerance).
+that three seeds in one program agree with their single-seed blocks to float tolerance).
 """
 
 from __future__ import annotations
