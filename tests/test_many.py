@@ -218,7 +218,7 @@ def test_a_group_that_cannot_share_a_program_is_refused():
     (["--seeds", "3-1"], "--seeds '3-1' is invalid; allowed: seeds and ranges such as 0-7"),
     (["--seeds", "0,0"], "names a seed twice"),
     (["--seeds", "0-99999"], "at most 4096 seeds"),
-    (["--seeds", "0-1", "--algo", "slac"], "pretrains a model first"),
+    (["--seeds", "0-1", "--algo", "slac"], "SLAC pretrains a model"),
     (["--seeds", "0-1", "--seed", "3"], "not allowed with argument"),
 ])
 def test_bad_seeds_are_one_clear_error_and_write_nothing(tmp_path, capsys, extra, message):

@@ -219,6 +219,13 @@ def cmd_train(args: argparse.Namespace) -> int:
     env_kwargs = _parse_kwargs(args.env_kwarg)
     if args.backend == "jax":
         return _train_jax(args, env_id, seeds, config, env_kwargs)
+    if len(seeds) > 1:  # an algo that cannot share a program, before any agent is built
+        from lili.many import check_group_algo
+
+        try:
+            check_group_algo(args.algo)
+        except ValueError as e:
+            raise UsageError(f"--seeds: {e}") from None
     folders = [_check_run_folder(args, env_id, env_kwargs, config, seed) for seed in seeds]
     envs = [_make_env(env_id, env_kwargs) for _ in seeds]
     agents = [make_agent(args.algo, env, config, seed) for env, seed in zip(envs, seeds,

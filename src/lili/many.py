@@ -54,14 +54,36 @@ from lili.train import (
     train,
 )
 
-__all__ = ["train_many", "check_group", "check_group_memory", "group_streams", "StackedBuffers",
-           "BufferView", "group_nbytes"]
+__all__ = ["train_many", "check_group", "check_group_algo", "check_group_memory",
+           "group_streams", "StackedBuffers", "BufferView", "group_nbytes"]
 
 
 def group_nbytes(agents: Sequence[Any]) -> int:
     """Bytes the stacked replay buffers of ``agents`` take together."""
     return sum(buffer_nbytes(a.config.buffer_capacity, a.horizon, a.obs_dim, a.act_dim)
                for a in agents)
+
+
+def _check_core_class(algo: str, core_cls: type | None) -> None:
+    """ValueError unless ``core_cls`` (None: not a SACCore) runs the shared update block."""
+    if core_cls is None:
+        raise ValueError(f"algo {algo!r} cannot train in a group (it has no update "
+                         "block); allowed: agents built on SACCore")
+    if core_cls.learn_block is not SACCore.learn_block:
+        raise ValueError(f"algo {algo!r} cannot train in a group (its update is not the "
+                         "shared block: SLAC pretrains a model, Random learns nothing); train "
+                         "it alone")
+
+
+def check_group_algo(algo: str) -> None:
+    """ValueError (the message :func:`check_group` gives) unless runs of the registered
+    ``algo`` can train in one program, read from its class: refusing SLAC costs no agent."""
+    from lili.agents.facade import AgentFacade
+    from lili.agents.registry import AGENTS, _load_all
+
+    _load_all()
+    cls = AGENTS[algo][0]
+    _check_core_class(algo, cls.core_cls if issubclass(cls, AgentFacade) else None)
 
 
 def check_group(agents: Sequence[Any], fraction: float = 0.5) -> None:
@@ -73,12 +95,7 @@ def check_group(agents: Sequence[Any], fraction: float = 0.5) -> None:
     first = agents[0]
     for a in agents:
         core = getattr(a, "core", None)
-        if not isinstance(core, SACCore):
-            raise ValueError(f"algo {a.algo!r} cannot train in a group (it has no update "
-                             "block); allowed: agents built on SACCore")
-        if type(core).learn_block is not SACCore.learn_block:
-            raise ValueError(f"algo {a.algo!r} cannot train in a group (its update is not the "
-                             "shared block: it pretrains a model first); train it alone")
+        _check_core_class(a.algo, type(core) if isinstance(core, SACCore) else None)
         if a.algo != first.algo:
             raise ValueError(f"a run group shares one algo: {first.algo!r} and {a.algo!r} "
                              "given; group runs by algo")

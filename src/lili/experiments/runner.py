@@ -61,16 +61,16 @@ def write_agent_configs(specs: list[RunSpec]) -> None:
 
 
 def groupable(algo: str) -> bool:
-    """Whether runs of ``algo`` can train in one program (:func:`lili.many.check_group`: a
-    SAC-family agent whose update is the shared block); read from the algo's class, so that
+    """Whether runs of ``algo`` can train in one program (:func:`lili.many.check_group_algo`:
+    a SAC-family agent whose update is the shared block); read from the algo's class, so that
     no list of algos is kept here."""
-    from lili.agents.core import SACCore
-    from lili.agents.facade import AgentFacade
-    from lili.agents.registry import AGENTS, _load_all
+    from lili.many import check_group_algo
 
-    _load_all()
-    cls = AGENTS[algo][0]
-    return issubclass(cls, AgentFacade) and cls.core_cls.learn_block is SACCore.learn_block
+    try:
+        check_group_algo(algo)
+    except ValueError:
+        return False
+    return True
 
 
 def _cell(spec: RunSpec) -> tuple:
