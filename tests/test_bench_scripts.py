@@ -42,7 +42,7 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
 @pytest.mark.parametrize(("script", "args"), [
     ("play_bot", ["a=scripted:greedy"]), ("latent_probe", ["run"]), ("influence", []),
     ("success_by_strategy", ["run"]), ("drift_lagged", []), ("run_cost", []),
-    ("boundary_probe", ["run"])])
+    ("boundary_probe", ["run"]), ("target_spread", ["run"])])
 @pytest.mark.parametrize("name", ["../x", "/tmp/x", ".hidden", ""])
 def test_result_name_must_be_a_plain_file_name(script: str, args: list[str], name: str,
                                                monkeypatch, capsys) -> None:
@@ -65,6 +65,25 @@ def test_success_by_strategy_script_on_a_real_run_record(tmp_path: Path, monkeyp
     assert row["strategies"] == ["left", "middle", "right"] and row["window"] == 1000
     (left, middle, _), _ = row["counts"]
     assert left[0] == 0 and left[1] > 300 and middle[0] / middle[1] > 0.95
+
+
+def test_target_spread_on_real_oracle_records(tmp_path: Path, monkeypatch) -> None:
+    script = _script("target_spread")
+    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
+    runs = BENCH / "results/runs"
+    plain = runs / "bench_point_mass/PointMass-v0/oracle/seed_0"
+    noisy = runs / "s32/noise-oracle/sigma_1/PointMass-v0/oracle/seed_2"
+    monkeypatch.setattr("sys.argv", ["x", str(plain), str(noisy), "--name", "t"])
+    script.main()
+    # Without noise the Oracle parks the target on a few spots; at sigma 1 the noise walks it
+    # round the circle, and the targets met seldom before cost it more than the ones met often.
+    a, b = json.loads((tmp_path / "t.json").read_text())["runs"]
+    assert a["step_noise"] == 0 and a["sectors"] <= 3
+    assert b["step_noise"] == 1.0 and b["sectors"] >= 10
+    assert b["return_seldom"] < b["return_often"] - 0.05
+    monkeypatch.setattr("sys.argv", ["x", str(plain), "--last", "1900", "--name", "t"])
+    with pytest.raises(SystemExit):
+        script.main()
 
 
 def test_latent_probe_recall_per_strategy() -> None:
