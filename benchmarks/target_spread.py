@@ -76,17 +76,18 @@ def main() -> None:
             row = spread(run.metrics["return"], sectors(run.metrics), args.last, args.history)
         except ValueError as e:
             p.error(f"{folder}: {e}")
-        step_noise = (run.config.get("env_kwargs") or {}).get("step_noise", 0.0)
+        kwargs = run.config.get("env_kwargs") or {}
+        setting = ", ".join(f"{k}={v}" for k, v in sorted(kwargs.items())) or "-"
         out.append({"run": folder, "env": run.env, "algo": run.algo, "seed": run.seed,
-                    "step_noise": step_noise, **row})
-        lines.append(f"| {folder} | {step_noise:g} | {row['return']:.3f} | {row['sectors']} | "
+                    "env_kwargs": kwargs, **row})
+        lines.append(f"| {folder} | {setting} | {row['return']:.3f} | {row['sectors']} | "
                      f"{row['return_often']:.3f} ({row['n_often']}) | "
                      f"{row['return_seldom']:.3f} ({row['n_seldom']}) |")
     table = "\n".join([
         f"last {args.last} interactions; often/seldom: the target's sector met more / not more "
         f"often than the median target in the {args.history} interactions before", "",
-        "| run | step_noise | return | sectors visited | return, often-met target (n) | "
-        "return, seldom-met target (n) |", "|---|---:|---:|---:|---:|---:|", *lines])
+        "| run | partner | return | sectors visited | return, often-met target (n) | "
+        "return, seldom-met target (n) |", "|---|---|---:|---:|---:|---:|", *lines])
     write_result(args.name, table, last=args.last, history=args.history, runs=out)
 
 
