@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import glob
 import json
 from pathlib import Path
 
@@ -14,6 +15,18 @@ def check_result_name(parser: argparse.ArgumentParser, name: str) -> None:
     if not name or Path(name).name != name or name.startswith("."):
         parser.error(f"--name {name!r} is invalid; allowed: a plain file name (it is written "
                      f"under {RESULTS})")
+
+
+def run_folders(parser: argparse.ArgumentParser, patterns: list[str]) -> list[str]:
+    """The run folders each glob pattern matches, in order; a pattern matching none is an
+    error of ``parser``."""
+    folders: list[str] = []
+    for pattern in patterns:
+        found = sorted(glob.glob(pattern))
+        if not found:
+            parser.error(f"{pattern!r} matches no run folder")
+        folders += found
+    return folders
 
 
 def write_result(name: str, table: str, **payload: object) -> Path:

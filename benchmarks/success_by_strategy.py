@@ -14,9 +14,8 @@ holds fewer than 5 interactions of that strategy) and writes
 from __future__ import annotations
 
 import argparse
-import glob
 
-from _results import check_result_name, write_result
+from _results import check_result_name, run_folders, write_result
 
 from lili.report.files import load_run
 from lili.report.stats import strategy_names, success_by_strategy
@@ -34,12 +33,7 @@ def main() -> None:
     if args.window < 1:
         p.error(f"--window {args.window} is invalid; allowed: an integer >= 1")
     check_result_name(p, args.name)
-    folders = []
-    for pattern in args.runs:
-        found = sorted(glob.glob(pattern))
-        if not found:
-            p.error(f"{pattern!r} matches no run folder")
-        folders += found
+    folders = run_folders(p, args.runs)
     out, lines = [], []
     for folder in folders:
         run = load_run(folder)

@@ -15,10 +15,9 @@ Prints a table and writes ``benchmarks/results/<--name>.json``.
 from __future__ import annotations
 
 import argparse
-import glob
 
 import numpy as np
-from _results import check_result_name, write_result
+from _results import check_result_name, run_folders, write_result
 
 from lili.report.files import load_run
 
@@ -63,12 +62,7 @@ def main() -> None:
         if getattr(args, flag) < 1:
             p.error(f"--{flag} {getattr(args, flag)} is invalid; allowed: an integer >= 1")
     check_result_name(p, args.name)
-    folders = []
-    for pattern in args.runs:
-        found = sorted(glob.glob(pattern))
-        if not found:
-            p.error(f"{pattern!r} matches no run folder")
-        folders += found
+    folders = run_folders(p, args.runs)
     out, lines = [], []
     for folder in folders:
         run = load_run(folder)

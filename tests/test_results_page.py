@@ -43,7 +43,7 @@ def test_lili_results_writes_the_page_and_a_figure_per_item(tmp_path: Path, caps
     assert "| LILI | 1.21 [1.20, 1.22] | 1.21 ± 0.01 | 90.0% [90.0, 90.0] |" in text
     # The setting and the command come from the runs' config.yaml (200 interactions here).
     assert "| 3 | 200 | `interactions=200` |" in text
-    assert ("lili reproduce air-hockey --interactions 200\n"
+    assert ("lili reproduce air-hockey --seeds 3 --interactions 200\n"
             "lili reproduce air-hockey --check-only") in text
     assert text.count("No committed records.") == 6  # the other six items have no runs here
     assert (page.parent / "results" / "air-hockey.png").read_bytes()[:8] == PNG_MAGIC
