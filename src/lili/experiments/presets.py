@@ -253,10 +253,11 @@ def _build() -> dict[str, Preset]:
                     seeds=6,
                     reason="at the paper's setting LILI falls below LILI (no influence) at "
                     "1000 interactions; with a tenth of the interactions played at random it "
-                    "comes out above it, not decisively: some seeds settle in a cycle of the "
-                    "striker's without left shots first and need up to 1000 interactions more "
-                    "to leave it (4 of 6 seeds in a left cycle at 2000, 5 of 6 at 3000; the "
-                    "journal's air hockey sections)"),
+                    "comes out above it, not decisively: some seeds first settle in a cycle of "
+                    "the striker's without left shots, or learn the left block late, and need "
+                    "more interactions to get past it; fewer of them are left at 3000 than at "
+                    "2000 (docs/results.md, \"Air hockey\"; the journal's air hockey "
+                    "sections)"),
         _history_text_rule(),
         _influence(),
         _contrib(),
