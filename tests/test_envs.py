@@ -151,6 +151,7 @@ def test_oracle_observation_appends_strategy(env_id: str) -> None:
         (lambda: PointMassEnv(history=0), "history=0"),
         (lambda: PointMassEnv(horizon=0), "horizon=0"),
         (lambda: PointMassEnv(render_mode="human"), "'human'"),
+        (lambda: PointMassEnv(strategy_votes="yes"), "strategy_votes='yes'.*true or false"),
         (lambda: Driving2DEnv(history=0), "history=0"),
         (lambda: Driving2DEnv(render_mode="human"), "'human'"),
     ],
@@ -242,6 +243,26 @@ def test_point_mass_history_follows_majority_of_last_three() -> None:
         _, info = env.reset()
         assert wrapped_diff(before, angle(info["strategy"])) == pytest.approx(
             direction * STEP, abs=1e-5)
+
+
+def test_point_mass_strategy_votes_tell_the_partners_whole_state() -> None:
+    env = gym.make("lili/PointMass-v0", history=3, strategy_votes=True)
+    assert env.unwrapped.strategy_space.shape == (5,)
+    _, info = env.reset(seed=4)
+    np.testing.assert_array_equal(info["strategy"][2:], [0, 0, 0])  # no vote cast yet
+    outcomes = [True, False, False, True]
+    expected_votes = [[1, 0, 0], [-1, 1, 0], [-1, -1, 1], [1, -1, -1]]  # most recent first
+    for inside, votes in zip(outcomes, expected_votes, strict=True):
+        before = angle(info["strategy"][:2])
+        run_interaction(env, stay if inside else to_corner)
+        _, info = env.reset()
+        np.testing.assert_array_equal(info["strategy"][2:], votes)
+        # The target part moves as without the votes: the majority of the last three.
+        majority = 1 if sum(votes) > 0 else -1
+        assert wrapped_diff(before, angle(info["strategy"][:2])) == pytest.approx(
+            -majority * STEP, abs=1e-5)
+    # The Oracle sees all five numbers.
+    assert OracleObservation(env).observation_space.shape == (2 + 5,)
 
 
 # -- Driving 2D ----------------------------------------------------------------------------------

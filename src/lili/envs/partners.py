@@ -48,6 +48,10 @@ class MajorityHistory:
     def clear(self) -> None:
         self._items.clear()
 
+    def recent(self) -> tuple[Hashable, ...]:
+        """The outcomes in the window, most recent first."""
+        return tuple(reversed(self._items))
+
     def push(self, outcome: Hashable) -> Hashable:
         """Record ``outcome`` and return the current majority."""
         self._items.append(outcome)

@@ -51,11 +51,18 @@ class CirclePartner:
     strategy_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
 
     def __init__(self, step_noise: float = 0.0, history: int = 1,
-                 inside_turn: str = "clockwise") -> None:
+                 inside_turn: str = "clockwise", strategy_votes: bool = False) -> None:
         check_partner_options(step_noise, history)
         if inside_turn not in INSIDE_TURNS:
             raise ValueError(f"inside_turn={inside_turn!r} is invalid; allowed: "
                              f"{', '.join(INSIDE_TURNS)}")
+        if not isinstance(strategy_votes, (bool, np.bool_)):
+            raise ValueError(f"strategy_votes={strategy_votes!r} is invalid; "
+                             "allowed: true or false")
+        self.strategy_votes = bool(strategy_votes)
+        if self.strategy_votes:
+            self.strategy_space = spaces.Box(-1.0, 1.0, shape=(2 + int(history),),
+                                             dtype=np.float32)
         self.inside_sign = -1.0 if inside_turn == "clockwise" else 1.0
         self.step_noise = float(step_noise)
         self.votes = MajorityHistory(history)
@@ -69,7 +76,12 @@ class CirclePartner:
         return CENTER + RADIUS * np.array([np.cos(self.theta), np.sin(self.theta)])
 
     def strategy(self) -> np.ndarray:
-        return self.target().astype(np.float32)
+        if not self.strategy_votes:
+            return self.target().astype(np.float32)
+        votes = np.zeros(self.votes.n)
+        recent = self.votes.recent()
+        votes[:len(recent)] = [1.0 if inside else -1.0 for inside in recent]
+        return np.concatenate([self.target(), votes]).astype(np.float32)
 
     def strategy_id(self) -> int | None:
         return None
@@ -85,8 +97,9 @@ class CirclePartner:
 class PointMassEnv(RepeatedInteractionEnv):
     """``lili/PointMass-v0``. Observation: the ego's (x, y). Action: velocity in [-1, 1]^2.
 
-    ``info["strategy"]`` is the target's (x, y). Success is not defined; the figure of merit is
-    the return (the paper: SAC -5.05, LILI -0.72, Oracle -0.54).
+    ``info["strategy"]`` is the target's (x, y), followed by the partner's votes with
+    ``strategy_votes=True`` (see :class:`CirclePartner`). Success is not defined; the figure of
+    merit is the return (the paper: SAC -5.05, LILI -0.72, Oracle -0.54).
     """
 
     def __init__(
@@ -96,12 +109,13 @@ class PointMassEnv(RepeatedInteractionEnv):
         horizon: int = 50,
         render_mode: str | None = None,
         inside_turn: str = "clockwise",
+        strategy_votes: bool = False,
     ) -> None:
         super().__init__(render_mode)
         if isinstance(horizon, bool) or not isinstance(horizon, (int, np.integer)) or horizon < 1:
             raise ValueError(f"horizon={horizon!r} is invalid; allowed: an integer >= 1")
         self.horizon = int(horizon)
-        self.partner = CirclePartner(step_noise, history, inside_turn)
+        self.partner = CirclePartner(step_noise, history, inside_turn, strategy_votes)
         self.observation_space = spaces.Box(-BOUND, BOUND, shape=(2,), dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         self.pos = np.zeros(2)
