@@ -70,7 +70,7 @@ def test_envs_keeps_only_those_envs_by_id_or_alias(tmp_path: Path) -> None:
     drift = plan(get_preset("influence"), tmp_path, envs=("influence-drift",))
     assert {s.env for s in drift} == {"lili/InfluenceDrift-v0"} and len(drift) == 5 * 3
     paper = plan(get_preset("paper"), tmp_path, envs=("lili/AirHockey-v0",), algos=("sac",))
-    assert [(s.env, s.algo) for s in paper] == [("lili/AirHockey-v0", "sac")] * 6
+    assert [(s.env, s.algo) for s in paper] == [("lili/AirHockey-v0", "sac")] * 8
 
 
 def test_set_overrides_every_run_and_is_checked(tmp_path: Path, capsys) -> None:
@@ -145,8 +145,8 @@ def test_each_algo_checks_its_own_constraints_before_anything_runs(tmp_path: Pat
 def test_paper_counts_each_run_once(tmp_path: Path) -> None:
     specs = plan(get_preset("paper"), tmp_path)
     # Point Mass 6, noise and history 5 LILI rows + SAC and the Oracle at 2 variants each,
-    # the three driving/landing tasks 6 (3 seeds each), air hockey 5 (6 seeds).
-    assert len({s.run_dir for s in specs}) == len(specs) == 3 * (6 + 9 + 9 + 6 + 6 + 6) + 6 * 5
+    # the three driving/landing tasks 6 (3 seeds each), air hockey 5 (8 seeds).
+    assert len({s.run_dir for s in specs}) == len(specs) == 3 * (6 + 9 + 9 + 6 + 6 + 6) + 8 * 5
 
 
 def test_quick_algos_and_seeds(tmp_path: Path) -> None:
@@ -298,8 +298,8 @@ def test_ray_without_the_extra(tmp_path: Path) -> None:
 def test_dry_run_lists_runs_and_cpu_hours(tmp_path: Path, capsys) -> None:
     assert main(["reproduce", "paper", "--dry-run", "--out", str(tmp_path / "out")]) == 0
     out = capsys.readouterr().out
-    assert out.count("\nnew ") + out.startswith("new ") == 156
-    assert "paper: 156 runs (156 to run, 0 done); estimated " in out
+    assert out.count("\nnew ") + out.startswith("new ") == 166
+    assert "paper: 166 runs (166 to run, 0 done); estimated " in out
     hours = float(out.split("estimated ")[1].split(" CPU-hours")[0])
     assert 10 < hours < 200
     assert "  noise: " in out and "  air-hockey: " in out
