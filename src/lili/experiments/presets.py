@@ -254,11 +254,11 @@ def _build() -> dict[str, Preset]:
                     seeds=8,
                     reason="at the paper's setting LILI falls below LILI (no influence) at "
                     "1000 interactions; with a tenth of the interactions played at random it "
-                    "comes out above it, not decisively: some seeds first settle in a cycle of "
-                    "the striker's without left shots, or learn the left block late, and need "
-                    "more interactions to get past it; fewer of them are left at 3000 than at "
-                    "2000, and eight seeds make the order decisive (docs/results.md, \"Air "
-                    "hockey\"; the journal's air hockey sections)"),
+                    "comes out above it, but some seeds first settle in a cycle of the "
+                    "striker's without left shots, or learn the left block late, and need more "
+                    "interactions to get past it; fewer of them are left at 3000 than at 2000, "
+                    "and eight seeds make the order decisive (docs/results.md, \"Air hockey\"; "
+                    "the journal's air hockey sections)"),
         _history_text_rule(),
         _influence(),
         _contrib(),
