@@ -42,7 +42,8 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
 @pytest.mark.parametrize(("script", "args"), [
     ("play_bot", ["a=scripted:greedy"]), ("latent_probe", ["run"]), ("influence", []),
     ("success_by_strategy", ["run"]), ("drift_lagged", []), ("run_cost", []),
-    ("boundary_probe", ["run"]), ("target_spread", ["run"])])
+    ("boundary_probe", ["run"]), ("target_spread", ["run"]),
+    ("budget_windows", ["run"])])
 @pytest.mark.parametrize("name", ["../x", "/tmp/x", ".hidden", ""])
 def test_result_name_must_be_a_plain_file_name(script: str, args: list[str], name: str,
                                                monkeypatch, capsys) -> None:
@@ -84,6 +85,36 @@ def test_target_spread_on_real_oracle_records(tmp_path: Path, monkeypatch) -> No
     monkeypatch.setattr("sys.argv", ["x", str(plain), "--last", "1900", "--name", "t"])
     with pytest.raises(SystemExit):
         script.main()
+
+
+def test_budget_windows_helpers() -> None:
+    script = _script("budget_windows")
+    returns = np.array([0.0, 1.0, 5.0, 0.0, 3.0])
+    assert script.best_window_end(returns, 2) == 3  # (1 + 5) / 2 ends at interaction 3
+    assert script.window_means(returns, 2) == [0.5, 2.5]  # the unfinished last window is left
+    with pytest.raises(ValueError, match="5 interactions; --best 6"):
+        script.best_window_end(returns, 6)
+    assert script.paper_row("noise", {"step_noise": 0.2}) == (-0.8563, 0.0539)
+    assert script.paper_row("noise", {}) == (-0.7206, 0.0061)  # no noise: the sigma 0 row
+    assert script.paper_row("history", {}) == script.paper_row("history", {"history": 1})
+    assert script.paper_row("noise", {"step_noise": 0.3}) is None
+    assert script.paper_row(None, {"step_noise": 0.2}) is None
+
+
+def test_budget_windows_on_real_noise_records(tmp_path: Path, monkeypatch) -> None:
+    script = _script("budget_windows")
+    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
+    runs = BENCH / "results/runs/s9/noise"
+    monkeypatch.setattr("sys.argv", ["x", str(runs / "sigma_0.2/PointMass-v0/lili/seed_*"),
+                                     str(runs / "sigma_1/PointMass-v0/lili/seed_*"),
+                                     "--paper", "noise", "--name", "b"])
+    script.main()
+    low, high = json.loads((tmp_path / "b.json").read_text())["groups"]
+    # The shortfall at 2000 interactions: 2.3 and 2.2 combined s.e. below the paper.
+    assert low["env_kwargs"] == {"step_noise": 0.2} and low["seeds"] == 3
+    assert low["paper"] == [-0.8563, 0.0539] and -2.4 < low["gap_combined_se"] < -2.2
+    assert high["env_kwargs"] == {"step_noise": 1.0} and -2.3 < high["gap_combined_se"] < -2.1
+    assert len(low["window_means"]) == 5 and low["window_means"][0] < low["window_means"][-1]
 
 
 def test_latent_probe_recall_per_strategy() -> None:

@@ -1,0 +1,124 @@
+"""How runs' return moves with their budget, window by window, beside the paper's number.
+
+    python benchmarks/budget_windows.py RUN_GLOB [RUN_GLOB ...] [--paper noise]
+        [--window 400] [--best 200] [--late 300] [--name budget_windows]
+
+Runs are grouped by algo, env options and budget (so the same seeds at 2000 and at 4000
+interactions are two groups). Per group: the final return (mean over the last 10% of each run's
+interactions, as every table of the library scores it), mean +- s.e. and IQM [bootstrap 95% CI]
+over seeds; with ``--paper TABLE`` (a table of :data:`lili.report.paper.PAPER_TABLES` with a
+``parameter``, e.g. ``noise`` or ``history``), the paper's row for the group's parameter value
+and the gap to it in combined standard errors; and how many seeds are still rising: their best
+``--best``-interaction mean ends within the last ``--late`` interactions. A second table gives
+the mean over seeds of every ``--window`` interactions, so a longer budget can be read against a
+shorter one at the same interactions (the first 2000 interactions of a 4000-interaction run are
+the 2000-interaction run of the same seed where the code did not change between them).
+Prints both tables and writes ``benchmarks/results/<--name>.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+from _results import check_result_name, run_folders, write_result
+
+from lili.report.files import load_run
+from lili.report.paper import PAPER_TABLES
+from lili.report.stats import final_performance, iqm_ci, mean_se
+
+
+def best_window_end(returns: np.ndarray, width: int) -> int:
+    """The interaction (exclusive end) at which the run's best ``width``-interaction mean ends."""
+    if len(returns) < width:
+        raise ValueError(f"the run has {len(returns)} interactions; --best {width} needs as many")
+    means = np.convolve(returns, np.ones(width) / width, mode="valid")
+    return int(np.argmax(means)) + width
+
+
+def window_means(returns: np.ndarray, width: int) -> list[float]:
+    """The mean return of each whole ``width``-interaction window from the start."""
+    return [float(returns[i:i + width].mean()) for i in range(0, len(returns) - width + 1, width)]
+
+
+def paper_row(table: str | None, env_kwargs: dict) -> tuple[float, float] | None:
+    """The paper's (mean, s.e.) for the group's parameter value, or None (no table, no row)."""
+    if table is None:
+        return None
+    spec = PAPER_TABLES[table]
+    default = 1 if spec["parameter"] == "history" else 0.0
+    value = env_kwargs.get(spec["parameter"], default)
+    return next((row for key, row in spec["rows"].items() if math.isclose(key, value)), None)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("runs", nargs="+", metavar="RUN_GLOB")
+    tables = sorted(k for k, v in PAPER_TABLES.items() if "parameter" in v)
+    p.add_argument("--paper", choices=tables, help="the paper's table to set beside each group")
+    p.add_argument("--window", type=int, default=400)
+    p.add_argument("--best", type=int, default=200)
+    p.add_argument("--late", type=int, default=300)
+    p.add_argument("--name", default="budget_windows", help="results file name (without .json)")
+    args = p.parse_args()
+    for flag in ("window", "best", "late"):
+        if getattr(args, flag) < 1:
+            p.error(f"--{flag} {getattr(args, flag)} is invalid; allowed: an integer >= 1")
+    check_result_name(p, args.name)
+    groups: dict[tuple, list] = {}
+    for folder in run_folders(p, args.runs):
+        run = load_run(folder)
+        kwargs = run.config.get("env_kwargs") or {}
+        key = (run.algo, tuple(sorted(kwargs.items())), len(run.metrics["return"]))
+        groups.setdefault(key, []).append((folder, run))
+    out, lines, wlines = [], [], []
+    widest = max(n for _, _, n in groups) // args.window
+    for (algo, kwargs, n), runs in sorted(groups.items()):
+        setting = ", ".join(f"{k}={v}" for k, v in kwargs) or "-"
+        per_run = []
+        for folder, run in runs:
+            returns = np.asarray(run.metrics["return"], dtype=float)
+            try:
+                end = best_window_end(returns, args.best)
+            except ValueError as e:
+                p.error(f"{folder}: {e}")
+            per_run.append({"run": folder, "seed": run.seed, "final": final_performance(run),
+                            "best_window_end": end, "windows": window_means(returns, args.window)})
+        finals = [r["final"] for r in per_run]
+        mean, se = mean_se(finals)
+        centre, low, high = iqm_ci(finals)
+        rising = sum(r["best_window_end"] > n - args.late for r in per_run)
+        paper = paper_row(args.paper, dict(kwargs))
+        gap = (None if paper is None
+               else (mean - paper[0]) / math.sqrt(se ** 2 + paper[1] ** 2))
+        windows = np.array([r["windows"] for r in per_run])
+        w_mean = windows.mean(axis=0).tolist()
+        out.append({"algo": algo, "env_kwargs": dict(kwargs), "interactions": n,
+                    "seeds": len(per_run), "final_mean": mean, "final_se": se,
+                    "final_iqm": centre, "final_iqm_ci": [low, high], "rising": rising,
+                    "paper": paper, "gap_combined_se": gap, "window_means": w_mean,
+                    "runs": per_run})
+        paper_text = "-" if paper is None else f"{paper[0]:.3f} ± {paper[1]:.3f}"
+        gap_text = "-" if gap is None else f"{gap:+.1f}"
+        lines.append(f"| {algo} | {setting} | {n} | {len(per_run)} | {mean:.3f} ± {se:.3f} | "
+                     f"{centre:.2f} [{low:.2f}, {high:.2f}] | {paper_text} | {gap_text} | "
+                     f"{rising} of {len(per_run)} |")
+        cells = [f"{m:.2f}" for m in w_mean] + [""] * (widest - len(w_mean))
+        wlines.append(f"| {algo} | {setting} | {n} | " + " | ".join(cells) + " |")
+    heads = [f"{(i + 1) * args.window}" for i in range(widest)]
+    table = "\n".join([
+        "final: mean return over the last 10% of each run's interactions; gap: (ours - paper) / "
+        f"combined s.e.; rising: seeds whose best {args.best}-interaction mean ends in their "
+        f"last {args.late} interactions", "",
+        "| algo | partner | interactions | seeds | final (mean ± s.e.) | final IQM [95% CI] | "
+        "paper | gap | rising |", "|---|---|---:|---:|---:|---:|---:|---:|---|", *lines, "",
+        f"mean return over seeds of each {args.window} interactions, by the window's end", "",
+        "| algo | partner | interactions | " + " | ".join(heads) + " |",
+        "|---|---|---:|" + "---:|" * widest, *wlines])
+    write_result(args.name, table, paper_table=args.paper, window=args.window, best=args.best,
+                 late=args.late, groups=out)
+
+
+if __name__ == "__main__":
+    main()
