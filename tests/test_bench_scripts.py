@@ -43,7 +43,7 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
     ("play_bot", ["a=scripted:greedy"]), ("latent_probe", ["run"]), ("influence", []),
     ("success_by_strategy", ["run"]), ("drift_lagged", []), ("run_cost", []),
     ("boundary_probe", ["run"]), ("target_spread", ["run"]),
-    ("budget_windows", ["run"])])
+    ("budget_windows", ["run"]), ("steer_sides", ["run"])])
 @pytest.mark.parametrize("name", ["../x", "/tmp/x", ".hidden", ""])
 def test_result_name_must_be_a_plain_file_name(script: str, args: list[str], name: str,
                                                monkeypatch, capsys) -> None:
@@ -115,6 +115,37 @@ def test_budget_windows_on_real_noise_records(tmp_path: Path, monkeypatch) -> No
     assert low["paper"] == [-0.8563, 0.0539] and -2.4 < low["gap_combined_se"] < -2.2
     assert high["env_kwargs"] == {"step_noise": 1.0} and -2.3 < high["gap_combined_se"] < -2.1
     assert len(low["window_means"]) == 5 and low["window_means"][0] < low["window_means"][-1]
+
+
+def test_steer_sides_helpers() -> None:
+    script = _script("steer_sides")
+    # The opponent's targets 1, 0, 0, 1 say the ego ended interactions 0-2 right, left, left.
+    assert script.end_sides(np.array([0, 1, 0, 0, 1])).tolist() == [1, 0, 0, 1]
+    figures = script.side_figures(np.array([0, 1, 0, 0, 1]), 3)
+    assert figures == {"left_share": 2 / 3, "switch_rate": 2 / 3}
+    with pytest.raises(ValueError, match="5 interactions; --last 4 needs 6"):
+        script.side_figures(np.array([0, 1, 0, 0, 1]), 4)
+
+
+def test_steer_sides_on_real_driving_records(tmp_path: Path, monkeypatch) -> None:
+    script = _script("steer_sides")
+    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
+    runs = BENCH / "results/runs"
+    sac = runs / "bench_driving_steer/DrivingSteer-v0/sac/seed_2"
+    alternating = runs / "s9/driving-steer/DrivingSteer-v0/lili-no-influence/seed_1"
+    monkeypatch.setattr("sys.argv", ["x", str(sac), str(alternating), "--name", "s"])
+    script.main()
+    result = json.loads((tmp_path / "s.json").read_text())
+    # Every interaction starts from the same observation; SAC keeps to the right and collides,
+    # LILI (no influence) passes on the other side each time and ends there.
+    assert result["distinct_starts"] == 1
+    keep, switch = result["runs"]
+    assert keep["switch_rate"] == 0 and keep["left_share"] == 0 and keep["success"] < 0.05
+    assert switch["switch_rate"] > 0.9 and switch["success"] > 0.95 and switch["length"] > 19
+    monkeypatch.setattr("sys.argv", ["x", str(runs / "s9/noise/sigma_1/PointMass-v0/lili/seed_0"),
+                                     "--name", "s"])
+    with pytest.raises(SystemExit):  # not a Driving (steering) run
+        script.main()
 
 
 def test_latent_probe_recall_per_strategy() -> None:
