@@ -100,9 +100,10 @@ def main() -> None:
                     "paper": paper, "gap_combined_se": gap, "window_means": w_mean,
                     "runs": per_run})
         paper_text = "-" if paper is None else f"{paper[0]:.3f} ± {paper[1]:.3f}"
+        ci_text = "" if low is None else f" [{low:.2f}, {high:.2f}]"
         gap_text = "-" if gap is None else f"{gap:+.1f}"
         lines.append(f"| {algo} | {setting} | {n} | {len(per_run)} | {mean:.3f} ± {se:.3f} | "
-                     f"{centre:.2f} [{low:.2f}, {high:.2f}] | {paper_text} | {gap_text} | "
+                     f"{centre:.2f}{ci_text} | {paper_text} | {gap_text} | "
                      f"{rising} of {len(per_run)} |")
         cells = [f"{m:.2f}" for m in w_mean] + [""] * (widest - len(w_mean))
         wlines.append(f"| {algo} | {setting} | {n} | " + " | ".join(cells) + " |")

@@ -115,6 +115,11 @@ def test_budget_windows_on_real_noise_records(tmp_path: Path, monkeypatch) -> No
     assert low["paper"] == [-0.8563, 0.0539] and -2.4 < low["gap_combined_se"] < -2.2
     assert high["env_kwargs"] == {"step_noise": 1.0} and -2.3 < high["gap_combined_se"] < -2.1
     assert len(low["window_means"]) == 5 and low["window_means"][0] < low["window_means"][-1]
+    one = str(runs / "sigma_0.2/PointMass-v0/lili/seed_0")  # one seed: no interval to print
+    monkeypatch.setattr("sys.argv", ["x", one, "--name", "b"])
+    script.main()
+    (group,) = json.loads((tmp_path / "b.json").read_text())["groups"]
+    assert group["final_iqm_ci"] == [None, None] and group["paper"] is None
 
 
 def test_steer_sides_helpers() -> None:
