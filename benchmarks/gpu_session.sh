@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Every Point Mass training that still waits on a GPU, in one call of at most 9 minutes:
+# Point Mass trainings for a GPU, in one call of at most 9 minutes:
 #
 #     OUT=/some/folder bash benchmarks/gpu_session.sh     # SMOKE=1: tiny budget, any CPU
 #                                                         # DRY=1: print the commands only
@@ -7,14 +7,16 @@
 # One `lili train point-mass --backend jax` process per line of the table below (the JAX twin
 # of Point Mass, lili.jax_train: the seeds of a line are one program; config.yaml says
 # `backend: jax`), all started at once and sharing the GPU (no XLA preallocation). Its parts
-# (PARTS, default "oracle long collapse critic-ln variants"):
+# (PARTS, default "collapse critic-ln variants", the ones that still wait on a GPU):
 #
 #   oracle     the Oracle against the noisy partner (sigma 0.4, 1.0) and the history-dependent
 #              one (N = 5, 11), seeds 0-2, 2000 interactions: the noise and history tables'
-#              missing Oracle cells (issue 34)
+#              missing Oracle cells (issue 34; done on a CPU in s32, records s32/noise-oracle
+#              and s32/history-oracle; not in the default)
 #   long       LILI at sigma 0.2, 0.6, 1.0, seeds 0-2, 4000 interactions: the noise table's
 #              check that ours sits below the paper because its curves still rise at 2000
-#              (issue 34), under noise-4000/
+#              (issue 34), under noise-4000/ (done on a CPU in s34 on the Gymnasium path,
+#              records s34/noise-4000; not in the default)
 #   collapse   Point Mass LILI (the current core), seeds 7-13, 2000 interactions: is critic
 #              divergence or the target's escape the usual collapse mode (issue 36, item 4;
 #              journal "Point Mass LILI's late collapses"; seeds 0-6 are s9/point-mass)
@@ -47,8 +49,8 @@
 #   2000 interactions in 126-129 s of training (the program's compile included).
 # So at 17 interactions a second: each 2000-interaction line (4 Oracle, 1 LILI, 2 LILI-LN,
 # 2 variants; K = 3 or 7) 60 + 120 = 180 s, each 4000-interaction LILI line 60 + 235 = 295 s;
-# with all twelve at once about 5 minutes if sharing the GPU costs them little. CAP = 480 s
-# gives the 4000-interaction lines 1.6x that for the contention (the 2000-interaction lines
+# with all twelve at once (every part) about 5 minutes if sharing the GPU costs them little.
+# CAP = 480 s gives the 4000-interaction lines 1.6x that for the contention (the 2000-interaction lines
 # end first and leave the GPU to them). GPU time of the call: at most CAP + about 30 s
 # (wheels, jax's start, tarball) = 8.5 minutes, plus the machine's start (1-2 minutes) and the
 # transfers.
@@ -74,7 +76,7 @@ set -o pipefail
 cd "$(dirname "$0")/.."
 OUT=${OUT:-/tmp/gpu_session}
 CAP=${CAP:-480}
-PARTS=${PARTS:-oracle long collapse critic-ln variants}
+PARTS=${PARTS:-collapse critic-ln variants}
 for part in $PARTS; do
     case $part in oracle|sac|long|collapse|critic-ln|variants) ;;
         *) echo "gpu_session.sh: PARTS names '$part'; allowed: oracle, sac, long, collapse," \

@@ -460,10 +460,13 @@ def test_gpu_session_dry_run_lists_each_part_and_writes_nothing(tmp_path: Path) 
     """The prepared GPU call, without a GPU: DRY=1 prints its `lili train` lines only."""
     out = _gpu_script(tmp_path, "gpu_session.sh", DRY="1")
     lines = out.stdout.splitlines()
-    assert out.returncode == 0 and len(lines) == 12, out.stdout + out.stderr
+    assert out.returncode == 0 and len(lines) == 5, out.stdout + out.stderr
     assert all(x.startswith("lili train point-mass --algo ") and x.endswith("--backend jax")
                for x in lines)
     assert sum("--algo lili-critic-ln --seeds" in x for x in lines) == 2
+    every = _gpu_script(tmp_path, "gpu_session.sh", DRY="1",
+                        PARTS="oracle long collapse critic-ln variants").stdout.splitlines()
+    assert len(every) == 12 and sum("--interactions 4000" in x for x in every) == 3
     assert not (tmp_path / "out").exists()
     # The superseded script's modes are the session's parts.
     old = _gpu_script(tmp_path, "gpu_records.sh", DRY="1").stdout.splitlines()
