@@ -26,6 +26,18 @@ def _script(name: str):
     return module
 
 
+def _run_on_records(name: str, runs: list[str], tmp_path: Path, monkeypatch,
+                    *flags: str) -> dict:
+    """Run benchmark script ``name`` on committed run folders (globs relative to
+    results/runs) with ``flags``, writing its result under ``tmp_path``; its JSON."""
+    script = _script(name)
+    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
+    paths = [str(BENCH / "results/runs" / r) for r in runs]
+    monkeypatch.setattr("sys.argv", ["x", *paths, *flags, "--name", "r"])
+    script.main()
+    return json.loads((tmp_path / "r.json").read_text())
+
+
 def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> None:
     merged = _script("influence").merged
     path = tmp_path / "r.json"
@@ -102,23 +114,17 @@ def test_budget_windows_helpers() -> None:
 
 
 def test_budget_windows_on_real_noise_records(tmp_path: Path, monkeypatch) -> None:
-    script = _script("budget_windows")
-    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
-    runs = BENCH / "results/runs/s9/noise"
-    monkeypatch.setattr("sys.argv", ["x", str(runs / "sigma_0.2/PointMass-v0/lili/seed_*"),
-                                     str(runs / "sigma_1/PointMass-v0/lili/seed_*"),
-                                     "--paper", "noise", "--name", "b"])
-    script.main()
-    low, high = json.loads((tmp_path / "b.json").read_text())["groups"]
+    noise = "s9/noise/sigma_{}/PointMass-v0/lili/seed_{}"
+    low, high = _run_on_records("budget_windows", [noise.format("0.2", "*"), noise.format(1, "*")],
+                                tmp_path, monkeypatch, "--paper", "noise")["groups"]
     # The issue's shortfall at 2000 interactions: 2.3 and 2.2 combined s.e. below the paper.
     assert low["env_kwargs"] == {"step_noise": 0.2} and low["seeds"] == 3
     assert low["paper"] == [-0.8563, 0.0539] and -2.4 < low["gap_combined_se"] < -2.2
     assert high["env_kwargs"] == {"step_noise": 1.0} and -2.3 < high["gap_combined_se"] < -2.1
     assert len(low["window_means"]) == 5 and low["window_means"][0] < low["window_means"][-1]
-    one = str(runs / "sigma_0.2/PointMass-v0/lili/seed_0")  # one seed: no interval to print
-    monkeypatch.setattr("sys.argv", ["x", one, "--name", "b"])
-    script.main()
-    (group,) = json.loads((tmp_path / "b.json").read_text())["groups"]
+    # One seed: no interval to print; no --paper: no paper row.
+    (group,) = _run_on_records("budget_windows", [noise.format("0.2", 0)], tmp_path,
+                               monkeypatch)["groups"]
     assert group["final_iqm_ci"] == [None, None] and group["paper"] is None
 
 
@@ -133,24 +139,18 @@ def test_steer_sides_helpers() -> None:
 
 
 def test_steer_sides_on_real_driving_records(tmp_path: Path, monkeypatch) -> None:
-    script = _script("steer_sides")
-    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
-    runs = BENCH / "results/runs"
-    sac = runs / "bench_driving_steer/DrivingSteer-v0/sac/seed_2"
-    alternating = runs / "s9/driving-steer/DrivingSteer-v0/lili-no-influence/seed_1"
-    monkeypatch.setattr("sys.argv", ["x", str(sac), str(alternating), "--name", "s"])
-    script.main()
-    result = json.loads((tmp_path / "s.json").read_text())
+    result = _run_on_records("steer_sides", [
+        "bench_driving_steer/DrivingSteer-v0/sac/seed_2",
+        "s9/driving-steer/DrivingSteer-v0/lili-no-influence/seed_1"], tmp_path, monkeypatch)
     # Every interaction starts from the same observation; SAC keeps to the right and collides,
     # LILI (no influence) passes on the other side each time and ends there.
     assert result["distinct_starts"] == 1
     keep, switch = result["runs"]
     assert keep["switch_rate"] == 0 and keep["left_share"] == 0 and keep["success"] < 0.05
     assert switch["switch_rate"] > 0.9 and switch["success"] > 0.95 and switch["length"] > 19
-    monkeypatch.setattr("sys.argv", ["x", str(runs / "s9/noise/sigma_1/PointMass-v0/lili/seed_0"),
-                                     "--name", "s"])
     with pytest.raises(SystemExit):  # not a Driving (steering) run
-        script.main()
+        _run_on_records("steer_sides", ["s9/noise/sigma_1/PointMass-v0/lili/seed_0"], tmp_path,
+                        monkeypatch)
 
 
 def test_latent_probe_recall_per_strategy() -> None:
