@@ -24,9 +24,11 @@ import math
 import numpy as np
 from _results import check_result_name, run_folders, write_result
 
+from lili.experiments.presets import get_preset
 from lili.report.files import load_run
 from lili.report.paper import PAPER_TABLES
 from lili.report.stats import final_performance, iqm_ci, mean_se
+from lili.report.tables import fmt_interval, fmt_mean_se
 
 
 def best_window_end(returns: np.ndarray, width: int) -> int:
@@ -47,7 +49,9 @@ def paper_row(table: str | None, env_kwargs: dict) -> tuple[float, float] | None
     if table is None:
         return None
     spec = PAPER_TABLES[table]
-    default = 1 if spec["parameter"] == "history" else 0.0
+    # A run without the option is the table's plain row: the preset's group without env kwargs.
+    default = next(g.value for g in get_preset(table).groups
+                   if not g.env_kwargs and g.value is not None)
     value = env_kwargs.get(spec["parameter"], default)
     return next((row for key, row in spec["rows"].items() if math.isclose(key, value)), None)
 
@@ -99,11 +103,11 @@ def main() -> None:
                     "final_iqm": centre, "final_iqm_ci": [low, high], "rising": rising,
                     "paper": paper, "gap_combined_se": gap, "window_means": w_mean,
                     "runs": per_run})
-        paper_text = "-" if paper is None else f"{paper[0]:.3f} ± {paper[1]:.3f}"
-        ci_text = "" if low is None else f" [{low:.2f}, {high:.2f}]"
-        gap_text = "-" if gap is None else f"{gap:+.1f}"
-        lines.append(f"| {algo} | {setting} | {n} | {len(per_run)} | {mean:.3f} ± {se:.3f} | "
-                     f"{centre:.2f}{ci_text} | {paper_text} | {gap_text} | "
+        paper_text = fmt_mean_se(*(paper or (None, None)), ".3f")
+        gap_text = "—" if gap is None else f"{gap:+.1f}"
+        lines.append(f"| {algo} | {setting} | {n} | {len(per_run)} | "
+                     f"{fmt_mean_se(mean, se, '.3f', n=len(per_run))} | "
+                     f"{fmt_interval(centre, low, high)} | {paper_text} | {gap_text} | "
                      f"{rising} of {len(per_run)} |")
         cells = [f"{m:.2f}" for m in w_mean] + [""] * (widest - len(w_mean))
         wlines.append(f"| {algo} | {setting} | {n} | " + " | ".join(cells) + " |")

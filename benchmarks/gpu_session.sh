@@ -50,8 +50,8 @@
 # So at 17 interactions a second: each 2000-interaction line (4 Oracle, 1 LILI, 2 LILI-LN,
 # 2 variants; K = 3 or 7) 60 + 120 = 180 s, each 4000-interaction LILI line 60 + 235 = 295 s;
 # with all twelve at once (every part) about 5 minutes if sharing the GPU costs them little.
-# CAP = 480 s gives the 4000-interaction lines 1.6x that for the contention (the 2000-interaction lines
-# end first and leave the GPU to them). GPU time of the call: at most CAP + about 30 s
+# CAP = 480 s gives the 4000-interaction lines 1.6x that for the contention (the
+# 2000-interaction lines end first and leave the GPU to them). GPU time of the call: at most CAP + about 30 s
 # (wheels, jax's start, tarball) = 8.5 minutes, plus the machine's start (1-2 minutes) and the
 # transfers.
 #

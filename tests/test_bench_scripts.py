@@ -67,36 +67,28 @@ def test_result_name_must_be_a_plain_file_name(script: str, args: list[str], nam
 
 
 def test_success_by_strategy_script_on_a_real_run_record(tmp_path: Path, monkeypatch) -> None:
-    script = _script("success_by_strategy")
-    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
-    run = BENCH / "results/runs/s13/air-hockey-rerun/AirHockey-v0/lili/seed_1"
-    monkeypatch.setattr("sys.argv", ["x", str(run), "--window", "1000", "--name", "s"])
-    script.main()
+    result = _run_on_records("success_by_strategy",
+                             ["s13/air-hockey-rerun/AirHockey-v0/lili/seed_1"], tmp_path,
+                             monkeypatch, "--window", "1000")
     # Seed 1 of the default game never blocks a left shot, though 350+ are fired in its first
     # 1000 interactions, and blocks nearly every middle one.
-    (row,) = json.loads((tmp_path / "s.json").read_text())["runs"]
+    (row,) = result["runs"]
     assert row["strategies"] == ["left", "middle", "right"] and row["window"] == 1000
     (left, middle, _), _ = row["counts"]
     assert left[0] == 0 and left[1] > 300 and middle[0] / middle[1] > 0.95
 
 
 def test_target_spread_on_real_oracle_records(tmp_path: Path, monkeypatch) -> None:
-    script = _script("target_spread")
-    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
-    runs = BENCH / "results/runs"
-    plain = runs / "bench_point_mass/PointMass-v0/oracle/seed_0"
-    noisy = runs / "s32/noise-oracle/sigma_1/PointMass-v0/oracle/seed_2"
-    monkeypatch.setattr("sys.argv", ["x", str(plain), str(noisy), "--name", "t"])
-    script.main()
+    plain = "bench_point_mass/PointMass-v0/oracle/seed_0"
+    noisy = "s32/noise-oracle/sigma_1/PointMass-v0/oracle/seed_2"
+    a, b = _run_on_records("target_spread", [plain, noisy], tmp_path, monkeypatch)["runs"]
     # Without noise the Oracle parks the target on a few spots; at sigma 1 the noise walks it
     # round the circle, and the targets met seldom before cost it more than the ones met often.
-    a, b = json.loads((tmp_path / "t.json").read_text())["runs"]
     assert a["env_kwargs"] == {} and a["sectors"] <= 3
     assert b["env_kwargs"] == {"step_noise": 1.0} and b["sectors"] >= 10
     assert b["return_seldom"] < b["return_often"] - 0.05
-    monkeypatch.setattr("sys.argv", ["x", str(plain), "--last", "1900", "--name", "t"])
     with pytest.raises(SystemExit):
-        script.main()
+        _run_on_records("target_spread", [plain], tmp_path, monkeypatch, "--last", "1900")
 
 
 def test_budget_windows_helpers() -> None:
