@@ -208,6 +208,32 @@ def test_set_encoder_maps_the_pooled_features_by_an_mlp_and_stays_permutation_in
                                                        flipped)), z, rtol=1e-5, atol=1e-6)
 
 
+def test_flat_encoder_reads_every_step_in_its_place_and_ignores_padding():
+    agent, core, state, batch = _point_mass_lili("lili-flat-encoder")
+    assert core.window_steps is None and agent.core.window_steps is None
+    prev = window_part(batch["window"], slice(None, -1))
+    enc = state.model["encoder"]
+    first = enc["params"]["MLP_0"]["Dense_0"]["kernel"]
+    assert first.shape == (agent.history * agent.horizon * core.feat_dim, SMALL.enc_hidden[0])
+    z = np.asarray(core._encode(enc, state.norm, prev))
+    # Places matter: reversing the steps moves z (LILI's pooled E would keep it).
+    flipped = {k: (v[:, :, ::-1] if v.ndim >= 3 else v) for k, v in prev.items()}
+    assert not np.allclose(np.asarray(core._encode(enc, state.norm, flipped)), z, atol=1e-4)
+    # A padded step (weight 0) is not read, whatever it holds.
+    w = prev["weight"].at[:, :, -5:].set(0.0)
+    masked = dict(prev, weight=w)
+    junk = dict(masked, obs=masked["obs"].at[:, :, -5:].set(1e3))
+    np.testing.assert_allclose(np.asarray(core._encode(enc, state.norm, junk)),
+                               np.asarray(core._encode(enc, state.norm, masked)), rtol=1e-6)
+    # Updates draw whole interactions in order for E (encoder_transitions is not read).
+    buffer = agent.learn(3).stream.buffer  # the warm-up's interactions, no update yet
+    drawn = core._batch(state, buffer.arrays, jnp.asarray(buffer.count), jax.random.PRNGKey(0))
+    assert drawn["window"]["t"].shape[-1] == agent.horizon
+    np.testing.assert_array_equal(np.asarray(drawn["window"]["t"][0, 0]), np.arange(agent.horizon))
+    with pytest.raises(ValueError, match="encoder_transitions"):
+        check_config("lili-flat-encoder", AgentConfig(encoder_transitions=8))
+
+
 def test_critic_layer_norm_normalises_both_q_networks_and_changes_nothing_else():
     agent, core, state, batch = _point_mass_lili("lili-critic-ln")
     (pair,) = state.model["critic"]["params"].values()  # the two Q networks, stacked

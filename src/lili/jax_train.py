@@ -205,7 +205,7 @@ def _program(core: SACCore, env: Any, carry: _Carry, params: Any, roots: jax.Arr
     states, metrics = jax.lax.cond(learn, block, skip, carry.states)
     if core.uses_latent:
         idx = counts[:, None] - 1 + jnp.arange(-core.history + 1, 1)[None, :]
-        windows = _windows(arrays, counts, idx, core.config.encoder_transitions)
+        windows = _windows(arrays, counts, idx, core.window_steps)
         acting = jax.vmap(core.next_acting)(states, windows)
     else:
         acting = jax.vmap(core.initial_acting)(states)

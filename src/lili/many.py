@@ -291,8 +291,7 @@ def _next_acting(agents: Sequence[Any], states: AgentState, stacked: StackedBuff
     core = agents[0].core
     if not core.uses_latent or int(stacked.counts.min()) < 1:
         return _initial_acting_all(core, states)
-    return _next_acting_all(core, states, stacked.windows(agents[0].config.encoder_transitions,
-                                                        core.history))
+    return _next_acting_all(core, states, stacked.windows(core.window_steps, core.history))
 
 
 def group_streams(agents: Sequence[Any]) -> list[Stream]:

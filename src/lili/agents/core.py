@@ -68,6 +68,7 @@ class SACCore:
         self.boundary = config.boundary or boundary or self.default_boundary
         self.latent_dim = config.latent_dim if self.uses_latent else 0
         self.history = config.history if self.uses_latent else 0
+        self.window_steps = self._window_steps()
         self.n_updates = max(1, round(config.updates_per_step * self.horizon))
         self.target_entropy = (
             -float(self.act_dim) if config.target_entropy is None
@@ -298,6 +299,12 @@ class SACCore:
                    "rep_loss": rep_loss, "q": q_mean, "entropy": -logp.mean()}
         return new_state, metrics
 
+    def _window_steps(self) -> int | None:
+        """How many transitions of each interaction the encoder reads (None: all of them, in
+        their order): ``encoder_transitions`` here; a variant whose encoder needs every step in
+        place says None."""
+        return self.config.encoder_transitions
+
     def _batch(self, state: AgentState, arrays: dict[str, jax.Array], count: jax.Array,
                key: jax.Array) -> Batch:
         """One training batch, drawn inside the scan (pure JAX).
@@ -307,7 +314,7 @@ class SACCore:
         """
         cfg = self.config
         return sample(arrays, count, key, cfg.batch_interactions, cfg.per_interaction,
-                      self.history, cfg.encoder_transitions)
+                      self.history, self.window_steps)
 
     def block(self, state: AgentState, arrays: dict[str, jax.Array], count: jax.Array,
               key: jax.Array) -> tuple[AgentState, dict[str, jax.Array]]:

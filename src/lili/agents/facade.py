@@ -155,7 +155,7 @@ class AgentFacade:
         """
         if buffer.count < 1 or not self.core.uses_latent:
             return self.initial_state()
-        window = buffer.window(buffer.count - 1, self.history, self.config.encoder_transitions)
+        window = buffer.window(buffer.count - 1, self.history, self.core.window_steps)
         return self.core.next_acting(self.state, window)
 
     next_latent_state = next_state  # the name of earlier releases

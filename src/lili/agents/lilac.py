@@ -292,8 +292,7 @@ class LILACCore(SACCore):
     def initial_acting(self, state: AgentState) -> ActingState:
         """The acting state at the first interaction: the unconditional prior's mean."""
         empty = InteractionBuffer(max(2, self.history), self.horizon, self.obs_dim,
-                                  self.act_dim).window(-1, self.history,
-                                                       self.config.encoder_transitions)
+                                  self.act_dim).window(-1, self.history, self.window_steps)
         return ActingState(self.jit_latent(state.model, state.norm, empty),
                            jnp.zeros((), jnp.int32))
 

@@ -73,6 +73,9 @@ TABLE: tuple[Algo, ...] = (
     Algo("lili-critic-ln", "lili.contrib.critics", LATENT_FIELDS),
     # Tried on Flee (issue 36): an MLP after E's pooling.
     Algo("lili-set-encoder", "lili.contrib.latents", LATENT_FIELDS),
+    # The history table's N = 11 (issue 34): one MLP over every step of the N interactions; it
+    # reads all steps, so not encoder_transitions.
+    Algo("lili-flat-encoder", "lili.contrib.latents", LATENT_FIELDS - {"encoder_transitions"}),
 )
 """Every algo, in display order."""
 

@@ -15,6 +15,8 @@ one target per next strategy", "the noise stops SAC through the critic"), each a
   instead of z.
 - ``lili-set-encoder``: E maps its pooled transition features to z by an MLP (Deep Sets'
   rho), not linearly (tried on Flee, issue 36).
+- ``lili-flat-encoder``: E is one MLP over every step of the last N interactions in place (the
+  history table's "LILI (N = 11) ≈ SAC", issue 34).
 
 Each gives, with its options at the values ``AgentConfig`` once had, the numbers of the
 ``latent_kind`` / ``latent_bottleneck`` / ``latent_target`` / ``critic_latent`` fields it
@@ -35,13 +37,19 @@ from lili.agents.base import Normaliser, Params
 from lili.agents.core import sg
 from lili.agents.latent import decoder_loss, window_part
 from lili.buffer import Batch, Window
-from lili.contrib.nets import QuantisedEncoder, SetEncoder, nearest_code, straight_through_one_hot
+from lili.contrib.nets import (
+    FlatEncoder,
+    QuantisedEncoder,
+    SetEncoder,
+    nearest_code,
+    straight_through_one_hot,
+)
 from lili.contrib.variant import VariantCore, variant
 from lili.nets import Decoder, Encoder
 
 __all__ = ["CategoricalOptions", "QuantisedOptions", "BottleneckOptions", "CategoricalLILI",
            "QuantisedLILI", "BottleneckLILI", "PosteriorLILI", "PredictionCriticLILI",
-           "SetEncoderLILI",
+           "SetEncoderLILI", "FlatEncoderLILI",
            "category_imbalance", "quantisation_loss", "bottleneck_kl", "PROBES", "probe_inputs",
            "decoder_predictions"]
 
@@ -264,6 +272,22 @@ class SetEncoderCore(VariantCore):
         self.encoder = SetEncoder(self.config.enc_hidden, self.config.latent_dim)
 
 
+class FlatEncoderCore(VariantCore):
+    """E is one MLP over every step of the last N interactions, each in its place
+    (:class:`FlatEncoder`), so its input, and what it must learn, grows N-fold with the history;
+    it reads all steps in updates too (``encoder_transitions`` is not read: a sample of steps
+    has no fixed places)."""
+
+    algo = "lili-flat-encoder"
+
+    def _build(self) -> None:
+        super()._build()
+        self.encoder = FlatEncoder(self.config.enc_hidden, self.config.latent_dim)
+
+    def _window_steps(self) -> int | None:
+        return None
+
+
 CategoricalLILI = variant(CategoricalCore, "LILI with a one-hot latent (``lili-categorical``).")
 QuantisedLILI = variant(QuantisedCore, "LILI with a vector-quantised latent (``lili-quantised``).")
 BottleneckLILI = variant(BottleneckCore, "LILI with a bottlenecked latent (``lili-bottleneck``).")
@@ -273,3 +297,5 @@ PredictionCriticLILI = variant(PredictionCriticCore, "LILI whose critic reads z'
                                                      "(``lili-prediction-critic``).")
 SetEncoderLILI = variant(SetEncoderCore, "LILI whose encoder has an MLP after the pooling "
                                          "(``lili-set-encoder``).")
+FlatEncoderLILI = variant(FlatEncoderCore, "LILI whose encoder is one MLP over every step of its "
+                                           "N interactions in place (``lili-flat-encoder``).")

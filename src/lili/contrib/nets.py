@@ -1,7 +1,7 @@
 """Network pieces only :mod:`lili.contrib` uses: the straight-through one-hot, the nearest code
-of a codebook, an encoder that carries its codebook and one with an MLP after its pooling
-(:mod:`lili.contrib.latents`), and a Q network with LayerNorm in its hidden layers
-(:mod:`lili.contrib.critics`' twin critic)."""
+of a codebook, an encoder that carries its codebook, one with an MLP after its pooling and one
+that reads its interactions as one flat input (:mod:`lili.contrib.latents`), and a Q network
+with LayerNorm in its hidden layers (:mod:`lili.contrib.critics`' twin critic)."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import flax.linen as nn
 import jax
 import jax.numpy as jnp
 
-from lili.nets import Encoder
+from lili.nets import MLP, Encoder
 
 __all__ = ["straight_through_one_hot", "nearest_code", "QuantisedEncoder", "SetEncoder",
-           "LayerNormMLP"]
+           "FlatEncoder", "LayerNormMLP"]
 
 
 def straight_through_one_hot(logits: jax.Array) -> jax.Array:
@@ -60,6 +60,23 @@ class SetEncoder(Encoder):
         for width in self.hidden:
             pooled = nn.relu(nn.Dense(width)(pooled))
         return pooled
+
+
+class FlatEncoder(nn.Module):
+    """E as one MLP over the N interactions' transitions laid side by side: every step of every
+    interaction, each in its place ([..., N, S, features] flattened to N * S * features, padding
+    zeroed by ``weight``), so each of the N x S places has weights of its own. LILI's E
+    (:class:`lili.nets.Encoder`) embeds every transition with one shared network and pools each
+    interaction, so what it must learn grows little with N; here it grows N-fold (the paper's
+    history experiment says only that its encoder "takes the last N trajectories as input")."""
+
+    hidden: Sequence[int]
+    latent_dim: int
+
+    @nn.compact
+    def __call__(self, x: jax.Array, weight: jax.Array) -> jax.Array:
+        flat = (x * weight[..., None].astype(x.dtype)).reshape(*x.shape[:-3], -1)
+        return MLP(self.hidden, self.latent_dim)(flat)
 
 
 class LayerNormMLP(nn.Module):
