@@ -210,7 +210,7 @@ def test_set_encoder_maps_the_pooled_features_by_an_mlp_and_stays_permutation_in
 
 def test_flat_encoder_reads_every_step_in_its_place_and_ignores_padding():
     agent, core, state, batch = _point_mass_lili("lili-flat-encoder")
-    assert core.window_steps is None and agent.core.window_steps is None
+    assert core.window_steps is None
     prev = window_part(batch["window"], slice(None, -1))
     enc = state.model["encoder"]
     first = enc["params"]["MLP_0"]["Dense_0"]["kernel"]

@@ -68,7 +68,6 @@ class SACCore:
         self.boundary = config.boundary or boundary or self.default_boundary
         self.latent_dim = config.latent_dim if self.uses_latent else 0
         self.history = config.history if self.uses_latent else 0
-        self.window_steps = self._window_steps()
         self.n_updates = max(1, round(config.updates_per_step * self.horizon))
         self.target_entropy = (
             -float(self.act_dim) if config.target_entropy is None
@@ -299,7 +298,8 @@ class SACCore:
                    "rep_loss": rep_loss, "q": q_mean, "entropy": -logp.mean()}
         return new_state, metrics
 
-    def _window_steps(self) -> int | None:
+    @property
+    def window_steps(self) -> int | None:
         """How many transitions of each interaction the encoder reads (None: all of them, in
         their order): ``encoder_transitions`` here; a variant whose encoder needs every step in
         place says None."""

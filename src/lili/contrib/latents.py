@@ -284,7 +284,8 @@ class FlatEncoderCore(VariantCore):
         super()._build()
         self.encoder = FlatEncoder(self.config.enc_hidden, self.config.latent_dim)
 
-    def _window_steps(self) -> int | None:
+    @property
+    def window_steps(self) -> int | None:
         return None
 
 
