@@ -156,3 +156,25 @@ def test_argparse_errors_are_one_line_and_help_exits_0(capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--interactions: invalid int value: '1.5'" in err
     assert cli.main(["eval", "--help"]) == 0
+
+
+def test_partner_history_that_the_encoder_does_not_read_is_noted(capsys, tmp_path):
+    run = tmp_path / "PointMass-v0" / "lili" / "seed_0"
+    run.mkdir(parents=True)
+    (run / "metrics.csv").write_text("precious\n")
+    argv = ["train", "point-mass", "--algo", "lili", "--env-kwarg", "history=5", "--out",
+            str(tmp_path)]
+    assert cli.main(argv) == 2  # the note comes before the run folder is checked
+    out = capsys.readouterr().out
+    assert "history=5" in out and "reads the last 1" in out and "history: 5" in out
+    cfg = tmp_path / "h.yaml"
+    cfg.write_text("history: 5\n")
+    assert cli.main([*argv, "--config", str(cfg)]) == 2
+    assert "note:" not in capsys.readouterr().out
+    # SAC has no encoder: the partner's history is nothing it could match.
+    sac = tmp_path / "PointMass-v0" / "sac" / "seed_0"
+    sac.mkdir(parents=True)
+    (sac / "metrics.csv").write_text("precious\n")
+    assert cli.main(["train", "point-mass", "--algo", "sac", "--env-kwarg", "history=5",
+                     "--out", str(tmp_path)]) == 2
+    assert "note:" not in capsys.readouterr().out

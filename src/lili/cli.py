@@ -189,6 +189,21 @@ def _check_run_folder(args: argparse.Namespace, env_id: str, env_kwargs: dict[st
     return run_dir, resolved
 
 
+def _note_history(algo: str, env_kwargs: dict[str, Any], config: Any) -> None:
+    """A note when the partner reacts to more or fewer interactions (``--env-kwarg history``)
+    than ``algo``'s encoder reads (its config's ``history``): the env option does not reach
+    the agent, and a mismatch is easy to miss, though it may be meant (an ablation)."""
+    from lili.agents.registry import reads
+
+    partner = env_kwargs.get("history")
+    if partner is None or "history" not in reads(algo) or partner == config.history:
+        return
+    print(f"note: the partner reacts to the last {partner} interactions (--env-kwarg "
+          f"history={partner}) but {algo}'s encoder reads the last {config.history} (config "
+          f"history: {config.history}); give a --config with history: {partner} to match them, "
+          "as the paper's history table does")
+
+
 def cmd_train(args: argparse.Namespace) -> int:
     from lili.agents import ALGOS, check_config, make_agent
     from lili.config import AgentConfig, load_config
@@ -217,6 +232,7 @@ def cmd_train(args: argparse.Namespace) -> int:
         raise UsageError(f"config file {str(args.config)!r}: {e}" if args.config
                          else str(e)) from None
     env_kwargs = _parse_kwargs(args.env_kwarg)
+    _note_history(args.algo, env_kwargs, config)
     if args.backend == "jax":
         return _train_jax(args, env_id, seeds, config, env_kwargs)
     if len(seeds) > 1:  # an algo that cannot share a program, before any agent is built
