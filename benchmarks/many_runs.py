@@ -9,8 +9,9 @@ JAX-native path.
 For each path and each K, K runs of ``--algo`` (seeds 0..K-1; the paper's sizes unless
 ``--config`` changes them) train together:
 
-- ``gym``: :func:`lili.many.train_many` (K Gymnasium envs stepping in Python, one vmapped act
-  per step, one vmapped update block per interaction);
+- ``gym``: :func:`lili.many.train_many` (K Gymnasium envs stepping in Python, one act program
+  per step, one update-block program per interaction, each mapped over the runs by
+  :func:`lili.agents.multiseed.over_seeds`: ``vmap`` on an accelerator, ``lax.map`` on a CPU);
 - ``jax``: :class:`lili.jax_train.JaxRuns` (the JAX twin of the env; one jitted, vmapped
   program per interaction: acting and env steps as a scan, the buffer write, the update block,
   the next latent).

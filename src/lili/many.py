@@ -5,18 +5,22 @@
 core (same algo, config, observation and action sizes, horizon; their seeds and env kwargs may
 differ), so that one compiled program serves them all:
 
-- per env step, one jitted ``vmap`` of the acting step for all K runs; the K Gymnasium envs step
+- per env step, one jitted program of the acting step for all K runs; the K Gymnasium envs step
   in Python, and runs whose interaction ended early wait, masked, until the last one ends;
 - the K replay buffers live stacked on the device (:class:`StackedBuffers`, arrays shaped
   [K, capacity, ...]) and each interaction is written into them in place by one donated update;
-- after each interaction one ``vmap`` of the update block (:func:`lili.agents.multiseed.
-  update_blocks`) and one ``vmap`` of the encoder for every run's next latent.
+- after each interaction one program of the update block for all runs (:func:`lili.agents.
+  multiseed.update_blocks`) and one of the encoder for every run's next latent.
+
+Each program maps its step over the runs with :func:`lili.agents.multiseed.over_seeds`: one run
+after another on a CPU, side by side (``vmap``) on an accelerator.
 
 Every run stays a run: its own :class:`~lili.train.Stream` (whose buffer becomes a
 :class:`BufferView` onto the stack), its own :class:`~lili.runs.RunLogger` (run folder,
 checkpoints, TensorBoard, summary), and the random streams come from (seed, interaction) as in
-:func:`~lili.train.train`, so each run's numbers equal the same run trained alone to float
-tolerance (vmapped float reductions may round differently in the last bits).
+:func:`~lili.train.train`, so on a CPU each run's numbers are bit for bit those of the same
+run trained alone, and on an accelerator equal to float tolerance (vmapped float reductions
+round differently in the last bits, and a run drifts apart from them).
 
 Time: each run's ``wall_time`` is the group's wall time (they ran at the same time) and its
 ``cpu_time`` the group's CPU time divided by K, so per-run costs add up to what the group cost.
@@ -35,7 +39,7 @@ import numpy as np
 
 from lili.agents.base import AgentState
 from lili.agents.core import SACCore
-from lili.agents.multiseed import stack, unstack, update_blocks
+from lili.agents.multiseed import over_seeds, stack, unstack, update_blocks
 from lili.buffer import (
     InteractionBuffer,
     Window,
@@ -137,7 +141,7 @@ def _write_all(arrays: dict[str, jax.Array], slots: jax.Array, rows: dict[str, j
 @partial(jax.jit, static_argnames=("steps",))
 def _windows(arrays: dict[str, jax.Array], counts: jax.Array, idx: jax.Array,
              steps: int | None) -> Window:
-    return jax.vmap(partial(_window, steps=steps))(arrays, counts, idx)
+    return over_seeds(partial(_window, steps=steps))(arrays, counts, idx)
 
 
 class StackedBuffers:
@@ -274,17 +278,17 @@ def _act_all(core: Any, actors: Any, norms: Any, obs: jax.Array, acting: Any,
     def one(actor, norm, o, s, k):
         return core._act_step(actor, norm, o, s, k, False)
 
-    return jax.vmap(one)(actors, norms, obs, acting, keys)
+    return over_seeds(one)(actors, norms, obs, acting, keys)
 
 
 @partial(jax.jit, static_argnums=0)
 def _next_acting_all(core: Any, states: AgentState, windows: Window) -> Any:
-    return jax.vmap(core.next_acting)(states, windows)
+    return over_seeds(core.next_acting)(states, windows)
 
 
 @partial(jax.jit, static_argnums=0)
 def _initial_acting_all(core: Any, states: AgentState) -> Any:
-    return jax.vmap(core.initial_acting)(states)
+    return over_seeds(core.initial_acting)(states)
 
 
 def _next_acting(agents: Sequence[Any], states: AgentState, stacked: StackedBuffers) -> Any:
