@@ -55,7 +55,7 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
     ("play_bot", ["a=scripted:greedy"]), ("latent_probe", ["run"]), ("influence", []),
     ("success_by_strategy", ["run"]), ("drift_lagged", []), ("run_cost", []),
     ("boundary_probe", ["run"]), ("target_spread", ["run"]),
-    ("budget_windows", ["run"]), ("steer_sides", ["run"])])
+    ("budget_windows", ["run"]), ("steer_sides", ["run"]), ("interaction_ends", ["run"])])
 @pytest.mark.parametrize("name", ["../x", "/tmp/x", ".hidden", ""])
 def test_result_name_must_be_a_plain_file_name(script: str, args: list[str], name: str,
                                                monkeypatch, capsys) -> None:
@@ -76,6 +76,22 @@ def test_success_by_strategy_script_on_a_real_run_record(tmp_path: Path, monkeyp
     assert row["strategies"] == ["left", "middle", "right"] and row["window"] == 1000
     (left, middle, _), _ = row["counts"]
     assert left[0] == 0 and left[1] > 300 and middle[0] / middle[1] > 0.95
+
+
+def test_interaction_ends_shares_and_real_lunar_lander_records(tmp_path: Path,
+                                                               monkeypatch) -> None:
+    ends = _script("interaction_ends").ends
+    success, length = np.array([1, 0, 0, 0, 1]), np.array([30, 60, 12, 60, 60])
+    assert ends(success, length, 60, 4) == [[0.25, 0.25, 0.5], [1.0, 0.0, 0.0]]
+    slac, sac = _run_on_records(
+        "interaction_ends", ["s36/lunar-lander-horizon-4000/LunarLander-v0/slac/seed_1",
+                             "s24/lunar-lander-horizon/LunarLander-v0/sac/seed_1"],
+        tmp_path, monkeypatch, "--window", "1000")["runs"]
+    # SLAC still hovers to the horizon in a sixth or more of its interactions at 4000; SAC
+    # at 2000 seldom does. The shares of a window add up to one.
+    assert slac["horizon"] == sac["horizon"] == 60 and len(slac["shares"]) == 4
+    assert min(w[2] for w in slac["shares"]) > 0.1 > max(w[2] for w in sac["shares"])
+    assert all(abs(sum(w) - 1) < 1e-9 for w in slac["shares"] + sac["shares"])
 
 
 def test_target_spread_on_real_oracle_records(tmp_path: Path, monkeypatch) -> None:

@@ -1,0 +1,69 @@
+"""How interactions end over training, from run folders (no training, no checkpoints).
+
+    python benchmarks/interaction_ends.py RUN_GLOB [RUN_GLOB ...] [--window 500]
+        [--name interaction_ends]
+
+For every run and consecutive window of ``--window`` interactions: the share that succeeded,
+the share that failed before the horizon (in Lunar Lander a crash, a landing off the pad or
+flying off), and the share played to the horizon without success (a lander that hovers). The
+horizon is the env's (built from the run's env id and env kwargs). Tells an agent that cannot
+land from one that will not. Prints a table and writes ``benchmarks/results/<--name>.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import gymnasium as gym
+import numpy as np
+from _results import check_result_name, run_folders, write_result
+
+import lili.envs  # noqa: F401  (registers the lili/ envs)
+from lili.report.files import load_run
+
+
+def ends(success: np.ndarray, length: np.ndarray, horizon: int,
+         window: int) -> list[list[float]]:
+    """Per window of ``window`` interactions: [succeeded, failed early, played to the horizon]
+    as shares of the window (its last window may be shorter)."""
+    out = []
+    for start in range(0, len(success), window):
+        ok, n = success[start:start + window] == 1, length[start:start + window]
+        full = (n >= horizon) & ~ok
+        out.append([float(ok.mean()), float((~ok & ~full).mean()), float(full.mean())])
+    return out
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("runs", nargs="+", metavar="RUN_GLOB")
+    p.add_argument("--window", type=int, default=500)
+    p.add_argument("--name", default="interaction_ends", help="results file name (without .json)")
+    args = p.parse_args()
+    if args.window < 1:
+        p.error(f"--window {args.window} is invalid; allowed: an integer >= 1")
+    check_result_name(p, args.name)
+    out, lines = [], []
+    for folder in run_folders(p, args.runs):
+        run = load_run(folder)
+        if not run.has_success:
+            p.error(f"run {folder} has no success column; allowed: runs of an env with success")
+        env = gym.make(run.env, **run.config.get("env_kwargs", {}))
+        horizon = int(env.unwrapped.horizon)
+        env.close()
+        shares = ends(run.metrics["success"], run.metrics["length"], horizon, args.window)
+        lines.append(f"| {folder} | " + " | ".join(
+            " / ".join(f"{100 * s:3.0f}" for s in w) for w in shares) + " |")
+        out.append({"run": folder, "env": run.env, "algo": run.algo, "seed": run.seed,
+                    "horizon": horizon, "window": args.window, "shares": shares})
+    n_windows = max(len(o["shares"]) for o in out)
+    head = [f"{k * args.window}-{(k + 1) * args.window - 1}" for k in range(n_windows)]
+    table = "\n".join([f"% of interactions that succeeded / failed early / reached the horizon "
+                       f"without success, windows of {args.window} interactions", "",
+                       "| run | " + " | ".join(head) + " |",
+                       "|---|" + "---|" * n_windows, *lines])
+    write_result(args.name, table, runs=out)
+
+
+if __name__ == "__main__":
+    main()
