@@ -36,3 +36,11 @@ def write_result(name: str, table: str, **payload: object) -> Path:
     path = RESULTS / f"{name}.json"
     path.write_text(json.dumps({"table": table, **payload}, indent=1))
     return path
+
+
+def window_table(title: str, window: int, n_windows: int, lines: list[str]) -> str:
+    """A markdown table of per-run rows ``lines`` over consecutive windows of ``window``
+    interactions, under ``title`` (the column heads name each window's interactions)."""
+    head = [f"{k * window}-{(k + 1) * window - 1}" for k in range(n_windows)]
+    return "\n".join([f"{title}, windows of {window} interactions", "",
+                      "| run | " + " | ".join(head) + " |", "|---|" + "---|" * n_windows, *lines])

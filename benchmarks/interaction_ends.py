@@ -16,7 +16,7 @@ import argparse
 
 import gymnasium as gym
 import numpy as np
-from _results import check_result_name, run_folders, write_result
+from _results import check_result_name, run_folders, window_table, write_result
 
 import lili.envs  # noqa: F401  (registers the lili/ envs)
 from lili.report.files import load_run
@@ -56,12 +56,9 @@ def main() -> None:
             " / ".join(f"{100 * s:3.0f}" for s in w) for w in shares) + " |")
         out.append({"run": folder, "env": run.env, "algo": run.algo, "seed": run.seed,
                     "horizon": horizon, "window": args.window, "shares": shares})
-    n_windows = max(len(o["shares"]) for o in out)
-    head = [f"{k * args.window}-{(k + 1) * args.window - 1}" for k in range(n_windows)]
-    table = "\n".join([f"% of interactions that succeeded / failed early / reached the horizon "
-                       f"without success, windows of {args.window} interactions", "",
-                       "| run | " + " | ".join(head) + " |",
-                       "|---|" + "---|" * n_windows, *lines])
+    table = window_table("% of interactions that succeeded / failed early / reached the horizon "
+                         "without success", args.window, max(len(o["shares"]) for o in out),
+                         lines)
     write_result(args.name, table, runs=out)
 
 

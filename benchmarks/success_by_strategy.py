@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import argparse
 
-from _results import check_result_name, run_folders, write_result
+from _results import check_result_name, run_folders, window_table, write_result
 
 from lili.report.files import load_run
 from lili.report.stats import strategy_names, success_by_strategy
@@ -47,12 +47,8 @@ def main() -> None:
         lines.append(f"| {folder} | " + " | ".join(cells) + " |")
         out.append({"run": folder, "env": run.env, "algo": run.algo, "seed": run.seed,
                     "strategies": names, "window": args.window, "counts": counts.tolist()})
-    n_windows = max(len(o["counts"]) for o in out)
-    head = [f"{k * args.window}-{(k + 1) * args.window - 1}" for k in range(n_windows)]
-    table = "\n".join([f"success % per strategy ({' / '.join(out[0]['strategies'])}), "
-                       f"windows of {args.window} interactions", "",
-                       "| run | " + " | ".join(head) + " |",
-                       "|---|" + "---|" * n_windows, *lines])
+    table = window_table(f"success % per strategy ({' / '.join(out[0]['strategies'])})",
+                         args.window, max(len(o["counts"]) for o in out), lines)
     write_result(args.name, table, runs=out)
 
 
