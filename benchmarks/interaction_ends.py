@@ -6,19 +6,20 @@
 For every run and consecutive window of ``--window`` interactions: the share that succeeded,
 the share that failed before the horizon (in Lunar Lander a crash, a landing off the pad or
 flying off), and the share played to the horizon without success (a lander that hovers). The
-horizon is the env's (built from the run's env id and env kwargs). Tells an agent that cannot
-land from one that will not. Prints a table and writes ``benchmarks/results/<--name>.json``.
+horizon is :func:`lili.envs.core.env_horizon` of the env the run's config names. Tells an agent
+that cannot land from one that will not. Prints a table and writes
+``benchmarks/results/<--name>.json``.
 """
 
 from __future__ import annotations
 
 import argparse
 
-import gymnasium as gym
 import numpy as np
 from _results import check_result_name, run_folders, window_table, write_result
 
-import lili.envs  # noqa: F401  (registers the lili/ envs)
+from lili.envs.core import env_horizon
+from lili.envs.spec import make_env
 from lili.report.files import load_run
 
 
@@ -48,8 +49,11 @@ def main() -> None:
         run = load_run(folder)
         if not run.has_success:
             p.error(f"run {folder} has no success column; allowed: runs of an env with success")
-        env = gym.make(run.env, **run.config.get("env_kwargs", {}))
-        horizon = int(env.unwrapped.horizon)
+        try:
+            env = make_env(run.env, run.config.get("env_kwargs"))
+        except ValueError as e:
+            p.error(f"run {folder}: {e}")
+        horizon = env_horizon(env)
         env.close()
         shares = ends(run.metrics["success"], run.metrics["length"], horizon, args.window)
         lines.append(f"| {folder} | " + " | ".join(
