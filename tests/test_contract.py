@@ -20,13 +20,13 @@ from lili.report import load_run
 from lili.runs import RunLogger, metric_columns, resume_run
 from lili.train import Stream, train
 
+TINY_SLAC = {"z1_dim": 4, "z2_dim": 4, "feature_dim": 4, "model_hidden": [8],
+             "sequence_length": 2, "model_batch": 4, "pretrain_steps": 2}
 # Tiny networks and a short warm-up: the checks are about plumbing, not learning.
 CONFIG = AgentConfig(hidden=(16, 16), enc_hidden=(8, 8), latent_dim=2, warmup_interactions=2,
                      batch_interactions=4, per_interaction=2, encoder_transitions=3,
                      checkpoint_every=2,
-                     extra={"slac": {"z1_dim": 4, "z2_dim": 4, "feature_dim": 4,
-                                     "model_hidden": [8], "sequence_length": 2,
-                                     "model_batch": 4, "pretrain_steps": 2},
+                     extra={"slac": TINY_SLAC, "slac-obs-critic": TINY_SLAC,
                             "lilac": {"prior_window": 1}})
 """One config for every algo; each is made with the part it reads (``config_for``)."""
 N = 5  # interactions per run

@@ -14,7 +14,7 @@ from test_contract import Asymmetric, _numbers, _run
 import lili.envs  # noqa: F401  (registers the envs)
 from lili.agents import LILI, make_agent
 from lili.agents.latent import decoder_loss, window_part
-from lili.agents.registry import ALGOS, CONTRIB_ALGOS, check_config, load_agent
+from lili.agents.registry import AGENTS, ALGOS, CONTRIB_ALGOS, TABLE, check_config, load_agent
 from lili.config import RETIRED_FIELDS, AgentConfig
 from lili.contrib.latents import PROBES, bottleneck_kl
 
@@ -286,7 +286,8 @@ def test_every_variant_trains_saves_and_resumes_like_the_core(algo, tmp_path):
     assert np.isfinite(_numbers(rows)[-1][2])  # it learned: the last block has an actor loss
     loaded = load_agent(agent.save(tmp_path / "agent.msgpack"), Asymmetric())
     assert type(loaded) is type(agent) and loaded.algo == algo
-    assert isinstance(agent, LILI)
+    core_algo = next(a.variant_of for a in TABLE if a.name == algo)
+    assert isinstance(agent, AGENTS[core_algo][0]) and core_algo in ALGOS
 
 
 def test_variant_options_are_checked_by_name_and_value():

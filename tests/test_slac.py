@@ -270,3 +270,35 @@ def test_cli_train_and_resume_give_the_numbers_of_an_uninterrupted_run(tmp_path,
     assert full[-1]["critic_loss"] != "" and full[-1]["rep_loss"] != ""
     assert _rows(copy / "metrics.csv") == full
     assert lili_train(tmp_path / "full") == 2  # an existing run is not overwritten
+
+
+def test_the_obs_critic_variant_reads_slacs_critic_input_and_the_frame_at_t():
+    """slac-obs-critic (lili.contrib.slac): its critic input is SLAC's ([z, phase]) followed by
+    the network frame of the observation at t; the target's, by the frame at t + 1, or the next
+    interaction's first frame after an interaction's last step."""
+    cfg = {**FAST, "extra": {"slac-obs-critic": TINY}}
+    variant = make_agent("slac-obs-critic", gym.make("lili/PointMass-v0"),
+                         AgentConfig.from_dict(cfg))
+    plain = _tiny()
+    assert isinstance(variant, SLAC) and variant.algo == "slac-obs-critic"
+    jax.tree.map(np.testing.assert_array_equal, variant.state.aux["slac"], plain.state.aux["slac"])
+    buf = _labelled_buffer([12, 5, 12, 9, 3, 12], horizon=plain.core.horizon)
+    args = (buf.arrays, jnp.asarray(buf.count), jax.random.PRNGKey(5))
+    out = {k: np.asarray(v) for k, v in variant.core._batch(variant.state, *args).items()
+           if k != "model"}
+    ref = {k: np.asarray(v) for k, v in plain.core._batch(plain.state, *args).items()
+           if k != "model"}
+    core, norm, dx = variant.core, variant.state.norm, variant.core.x_dim
+    assert out["x_critic"].shape[-1] == ref["x_critic"].shape[-1] + dx
+    assert core._input_dims()[0] == out["x_critic"].shape[-1]
+    np.testing.assert_array_equal(out["x_critic"][..., :-dx], ref["x_critic"])
+    np.testing.assert_array_equal(out["x_critic_next"][..., :-dx], ref["x_critic_next"])
+    k_of = np.broadcast_to(out["index"][:, None], out["t"].shape).astype(np.float32)
+    t = out["t"].astype(np.float32)
+    at_t = core._x(norm, jnp.stack([k_of, t], -1), t)
+    np.testing.assert_allclose(out["x_critic"][..., -dx:], np.asarray(at_t), rtol=1e-6)
+    last = out["last"][..., None]
+    nxt = np.where(last, core._x(norm, jnp.stack([k_of + 1, 0 * t], -1), 0.0),
+                   core._x(norm, jnp.stack([k_of, t + 1], -1), t + 1))
+    np.testing.assert_allclose(out["x_critic_next"][..., -dx:], nxt, rtol=1e-6)
+    assert out["last"].any() and (~out["last"]).any()

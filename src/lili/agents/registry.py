@@ -33,7 +33,8 @@ from lili.config import (
 )
 
 __all__ = ["Algo", "TABLE", "ALGOS", "PAPER_ALGOS", "CONTRIB_ALGOS", "CORE_ALGOS",
-           "AGENTS", "OPTIONS", "AGENT_FORMAT", "register", "register_options", "check_extra",
+           "LILI_VARIANTS", "AGENTS", "OPTIONS", "AGENT_FORMAT", "register", "register_options",
+           "check_extra",
            "check_config", "agent_options", "reads", "config_for", "stored_config",
            "make_agent", "load_agent", "read_agent_file"]
 
@@ -42,13 +43,15 @@ __all__ = ["Algo", "TABLE", "ALGOS", "PAPER_ALGOS", "CONTRIB_ALGOS", "CORE_ALGOS
 class Algo:
     """One algo: its name (``--algo``), the module that registers it, the
     :class:`~lili.config.AgentConfig` fields it reads (``extra`` aside: an algo reads
-    ``extra[<its name>]`` when it has options), and whether it is one of the paper's Fig. 4-6
-    algos (what the paper presets run)."""
+    ``extra[<its name>]`` when it has options), whether it is one of the paper's Fig. 4-6
+    algos (what the paper presets run), and for a variant of :mod:`lili.contrib` the core
+    algo it subclasses."""
 
     name: str
     module: str
     reads: frozenset[str]
     paper: bool = False
+    variant_of: str = ""
 
 
 TABLE: tuple[Algo, ...] = (
@@ -63,19 +66,23 @@ TABLE: tuple[Algo, ...] = (
     Algo("oracle", "lili.agents.oracle", SAC_FIELDS, paper=True),
     # Variants of LILI kept out of the core (lili.contrib, README "Contrib variants"); these
     # five measured no gain on Drift.
-    Algo("lili-categorical", "lili.contrib.latents", LATENT_FIELDS),
-    Algo("lili-quantised", "lili.contrib.latents", LATENT_FIELDS),
-    Algo("lili-bottleneck", "lili.contrib.latents", LATENT_FIELDS),
-    Algo("lili-posterior", "lili.contrib.latents", LATENT_FIELDS),
+    Algo("lili-categorical", "lili.contrib.latents", LATENT_FIELDS, variant_of="lili"),
+    Algo("lili-quantised", "lili.contrib.latents", LATENT_FIELDS, variant_of="lili"),
+    Algo("lili-bottleneck", "lili.contrib.latents", LATENT_FIELDS, variant_of="lili"),
+    Algo("lili-posterior", "lili.contrib.latents", LATENT_FIELDS, variant_of="lili"),
     # Its critic reads z's predictions, detached: no critic gradient reaches the encoder.
-    Algo("lili-prediction-critic", "lili.contrib.latents", LATENT_FIELDS - {"critic_to_encoder"}),
+    Algo("lili-prediction-critic", "lili.contrib.latents", LATENT_FIELDS - {"critic_to_encoder"},
+         variant_of="lili"),
     # A variant not yet measured (issue 36's candidate fix for critic divergence).
-    Algo("lili-critic-ln", "lili.contrib.critics", LATENT_FIELDS),
+    Algo("lili-critic-ln", "lili.contrib.critics", LATENT_FIELDS, variant_of="lili"),
     # Tried on Flee (issue 36): an MLP after E's pooling.
-    Algo("lili-set-encoder", "lili.contrib.latents", LATENT_FIELDS),
+    Algo("lili-set-encoder", "lili.contrib.latents", LATENT_FIELDS, variant_of="lili"),
     # The history table's N = 11 (issue 34): one MLP over every step of the N interactions; it
     # reads all steps, so not encoder_transitions.
-    Algo("lili-flat-encoder", "lili.contrib.latents", LATENT_FIELDS - {"encoder_transitions"}),
+    Algo("lili-flat-encoder", "lili.contrib.latents", LATENT_FIELDS - {"encoder_transitions"},
+         variant_of="lili"),
+    # Lunar Lander's SLAC hovers (issue 34): its critic reads the observation beside the latent.
+    Algo("slac-obs-critic", "lili.contrib.slac", SAC_FIELDS, variant_of="slac"),
 )
 """Every algo, in display order."""
 
@@ -87,6 +94,8 @@ PAPER_ALGOS: tuple[str, ...] = tuple(a.name for a in TABLE if a.paper)
 """The paper's algos (the env presets run these)."""
 CONTRIB_ALGOS: tuple[str, ...] = tuple(a.name for a in TABLE if a.module.startswith("lili.contrib"))
 """The algos of :mod:`lili.contrib`."""
+LILI_VARIANTS: tuple[str, ...] = tuple(a.name for a in TABLE if a.variant_of == "lili")
+"""The variants of LILI in :mod:`lili.contrib` (what the ``contrib`` preset runs beside LILI)."""
 CORE_ALGOS: tuple[str, ...] = tuple(a for a in ALGOS if a not in CONTRIB_ALGOS)
 """The algos of :mod:`lili.agents` (the contract tests run every one of them)."""
 

@@ -73,7 +73,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import partial
-from typing import Any
+from typing import Any, ClassVar
 
 import flax.linen as nn
 import jax
@@ -323,10 +323,12 @@ class SLACCore(SACCore):
     first, zero before the interaction's start."""
 
     default_boundary = "bootstrap"
+    options_key: ClassVar[str] = "slac"
+    """Where the options live: ``config.extra[options_key]`` (a variant reads its own)."""
 
     def __init__(self, obs_dim: int, act_dim: int, horizon: int, config: AgentConfig,
                  boundary: str | None = None) -> None:
-        self.options: SLACOptions = dataclass_options(config, "slac", SLACOptions)
+        self.options: SLACOptions = dataclass_options(config, self.options_key, SLACOptions)
         self.options.check(config)
         super().__init__(obs_dim, act_dim, horizon, config, boundary)
         self.jit_model_step = partial(core_jit("_model_step"), self)
@@ -361,6 +363,12 @@ class SLACCore(SACCore):
         if not self.config.phase_feature:
             return z
         return jnp.concatenate([z, (t.astype(jnp.float32) / self.horizon)[..., None]], -1)
+
+    def _critic_in(self, z: jax.Array, t: jax.Array, x: jax.Array) -> jax.Array:
+        """The critic's input at step ``t`` from the latent sample ``z`` and the network frame
+        ``x`` of the observation at t: SLAC's reads the latent only (a variant may read more;
+        its width is :meth:`_input_dims`'s first)."""
+        return self._critic_x(z, t)
 
     def posterior(self, params: Params, x: jax.Array, a: jax.Array, key: jax.Array):
         """Filter a sequence: frames ``x`` [N, T+1, dx], actions ``a`` [N, T, ad].
@@ -467,11 +475,12 @@ class SLACCore(SACCore):
         pad_x = jnp.zeros((b, k - 1, self.x_dim))
         first_hist = actor_input(jnp.concatenate([pad_x, x_first[:, None]], 1),
                                  jnp.zeros((b, k - 1, self.act_dim)))
+        x_next = jnp.where(last, x_first[:, None], x_hist[..., k, :])
         out = {key_: batch[key_] for key_ in ("act", "rew", "t", "last", "index")}
         out.update(
-            x_critic=self._critic_x(z_t, batch["t"]),
+            x_critic=self._critic_in(z_t, batch["t"], x_hist[..., k - 1, :]),
             x_actor=actor_input(x_hist[..., :k, :], acts[..., : k - 1, :]),
-            x_critic_next=self._critic_x(z_next, t_next),
+            x_critic_next=self._critic_in(z_next, t_next, x_next),
             x_actor_next=jnp.where(last, first_hist[:, None],
                                    actor_input(x_hist[..., 1:, :], acts[..., 1:, :])),
             model=self._model_batch(arrays, count, k_model),

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from lili.agents.registry import CONTRIB_ALGOS, PAPER_ALGOS
+from lili.agents.registry import LILI_VARIANTS, PAPER_ALGOS
 
 __all__ = ["Group", "Preset", "PRESETS", "get_preset", "ALL_ALGOS"]
 
@@ -218,7 +218,7 @@ def _contrib() -> Preset:
                   "and Point Mass",
                   where="not in the paper: variants kept out of the core (README.md, "
                   "\"Contrib variants\")", interactions=2000,
-                  groups=tuple(Group(folder="contrib", env=env, algos=("lili", *CONTRIB_ALGOS),
+                  groups=tuple(Group(folder="contrib", env=env, algos=("lili", *LILI_VARIANTS),
                                      env_kwargs=INFLUENCE_KWARGS.get(env, {}))
                                for env in (*INFLUENCE_ENVS, PM)))
 

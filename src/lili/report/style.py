@@ -27,6 +27,7 @@ ALGO_LABELS = {
     "lili-prediction-critic": "LILI (prediction critic)",
     "lili-set-encoder": "LILI (set encoder)",
     "lili-critic-ln": "LILI (critic LayerNorm)",
+    "slac-obs-critic": "SLAC (critic reads the observation)",
 }
 ALGO_COLORS = {
     "random": "#7f7f7f",
