@@ -12,9 +12,9 @@ For each path and each K, K runs of ``--algo`` (seeds 0..K-1; the paper's sizes 
 - ``gym``: :func:`lili.many.train_many` (K Gymnasium envs stepping in Python, one act program
   per step, one update-block program per interaction, each mapped over the runs by
   :func:`lili.agents.multiseed.over_seeds`: ``vmap`` on an accelerator, ``lax.map`` on a CPU);
-- ``jax``: :class:`lili.jax_train.JaxRuns` (the JAX twin of the env; one jitted, vmapped
-  program per interaction: acting and env steps as a scan, the buffer write, the update block,
-  the next latent).
+- ``jax``: :class:`lili.jax_train.JaxRuns` (the JAX twin of the env; one jitted program per
+  interaction, mapped over the runs by the same ``over_seeds``: acting and env steps as a scan,
+  the buffer write, the update block, the next latent).
 
 Each run first plays its warm-up and one more interaction (compiling everything; timed apart as
 ``first_s``), then ``--interactions`` more are timed (one value for every K, or one per K).

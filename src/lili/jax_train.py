@@ -4,8 +4,9 @@
 :class:`JaxRuns` trains K runs of one core (SAC, LILI, LILI without influence or an Oracle) on
 the JAX twin of their env (:mod:`lili.envs.jax`: Point Mass with any partner, Driving (2D), the
 influence suite). Where :func:`lili.many.train_many` steps K Gymnasium envs in Python, here one
-interaction of all K runs is ONE call of one jitted program, vmapped over the runs (PureJaxRL's
-``make_train`` idea):
+interaction of all K runs is ONE call of one jitted program, mapped over the runs
+(:func:`lili.agents.multiseed.over_seeds`: vmapped on an accelerator, PureJaxRL's ``make_train``
+idea; one run after another inside the program on a CPU):
 
 1. play: a ``lax.scan`` over the horizon of the core's acting step and the env's step (uniform
    random actions for the runs that play this interaction at random, as in the warm-up);
@@ -19,7 +20,8 @@ The maths is the core's and the buffer's: nothing here computes a loss or sample
 randomness comes from (seed, interaction), as in :func:`lili.train.train`: the agent's acting
 and update keys are :func:`lili.train.interaction_keys`'s, the env's and the random actions'
 another stream of the same seed. So a run's numbers do not depend on the other runs of its
-group (to float tolerance: vmapped reductions may round differently). They are not the numbers
+group: bit for bit on a CPU, to float tolerance on an accelerator (vmapped reductions round
+with the group's size). They are not the numbers
 of the same seed on the Gymnasium path, whose partner draws come from NumPy's generator.
 
 A Python loop over interactions writes each run's row to its own run folder
@@ -50,7 +52,7 @@ from flax import struct
 from lili.agents.base import ActingState, AgentState
 from lili.agents.core import SACCore
 from lili.agents.facade import to_bounds
-from lili.agents.multiseed import stack
+from lili.agents.multiseed import over_seeds, stack
 from lili.buffer import _available_memory, _write, buffer_nbytes
 from lili.many import StackedBuffers, _windows, check_group_memory
 from lili.metrics_file import plays_at_random
@@ -189,14 +191,14 @@ def _program(core: SACCore, env: Any, carry: _Carry, params: Any, roots: jax.Arr
     """Interaction ``index`` of every run (module docstring): play and store (where ``play``),
     the update block (where ``learn``; a real branch, the flag being one for all runs), then
     every run's next acting state. The carry is donated: the buffers are written in place."""
-    arrays, counts, env_state, obs, out = jax.vmap(
+    arrays, counts, env_state, obs, out = over_seeds(
         partial(_play, core, env, bounds, index, play))(
         carry.states, carry.arrays, carry.counts, carry.env_state, carry.obs, carry.acting,
         params, roots, at_random)
     upd_keys = jax.vmap(lambda r: run_interaction_keys(r, index)[1])(roots)
 
     def block(states):
-        return jax.vmap(core.block)(states, arrays, counts, upd_keys)
+        return over_seeds(core.block)(states, arrays, counts, upd_keys)
 
     def skip(states):
         shapes = jax.eval_shape(block, states)[1]
@@ -206,9 +208,9 @@ def _program(core: SACCore, env: Any, carry: _Carry, params: Any, roots: jax.Arr
     if core.uses_latent:
         idx = counts[:, None] - 1 + jnp.arange(-core.history + 1, 1)[None, :]
         windows = _windows(arrays, counts, idx, core.window_steps)
-        acting = jax.vmap(core.next_acting)(states, windows)
+        acting = over_seeds(core.next_acting)(states, windows)
     else:
-        acting = jax.vmap(core.initial_acting)(states)
+        acting = over_seeds(core.initial_acting)(states)
     finite = out.pop("finite") & jnp.stack(
         [jnp.isfinite(v) for v in jax.tree.leaves(metrics)]).all(0)
     out.update(metrics=metrics, finite=finite)
@@ -242,7 +244,7 @@ def _replay(env: Any, horizon: int, params: Any, roots: jax.Array, bounds: jax.A
                                        (jnp.arange(acts.shape[0], dtype=jnp.int32), acts))
         return obs, state
 
-    return jax.vmap(one)(params, roots, actions)
+    return over_seeds(one)(params, roots, actions)
 
 
 class JaxRuns:
@@ -308,12 +310,12 @@ class JaxRuns:
         self.roots = jnp.stack([jax.random.PRNGKey(s) for s in self.seeds])
         self.stacked = StackedBuffers(k, cfg.buffer_capacity, core.horizon, core.obs_dim,
                                       core.act_dim)
-        states = jax.jit(jax.vmap(core.init))(self.roots)
-        obs, env_state = jax.jit(jax.vmap(self.env.reset))(jax.vmap(_env_reset_key)(self.roots),
+        states = jax.jit(over_seeds(core.init))(self.roots)
+        obs, env_state = jax.jit(over_seeds(self.env.reset))(jax.vmap(_env_reset_key)(self.roots),
                                                           self.params)
         self.carry = _Carry(states=states, arrays=self.stacked.arrays,
                             counts=jnp.zeros(k, jnp.int32), env_state=env_state, obs=obs,
-                            acting=jax.vmap(core.initial_acting)(states))
+                            acting=over_seeds(core.initial_acting)(states))
         self.count = 0
         self.has_success = "success" in jax.eval_shape(
             self.env.step, jax.random.PRNGKey(0), jax.tree.map(lambda x: x[0], env_state),
@@ -390,7 +392,7 @@ class JaxRuns:
         self.carry = _Carry(states=states, arrays=self.stacked.arrays,
                             counts=jnp.asarray(self.stacked.counts, jnp.int32),
                             env_state=env_state, obs=obs,
-                            acting=jax.vmap(core.initial_acting)(states))
+                            acting=over_seeds(core.initial_acting)(states))
         self.count = n
         # The acting state the runs stopped with (z from their newest interactions).
         self._call(n - 1, np.zeros(k, bool), False, False)
