@@ -1,6 +1,7 @@
 """The JAX-native training path (``lili.jax_train``, ``lili train --backend jax``): a run's
-numbers do not depend on its group (bit for bit on a CPU), its run folder is one ``lili report`` reads, bad input is one
-clear error with nothing written, and (slow) Point Mass LILI learns on it."""
+numbers do not depend on its group (bit for bit on a CPU), its run folder is one ``lili report``
+reads, bad input is one clear error with nothing written, and (slow) Point Mass LILI learns on
+it."""
 
 from __future__ import annotations
 
