@@ -1,10 +1,12 @@
-"""Where the benchmark scripts write their JSON, and the check of a ``--name`` for it."""
+"""Where the benchmark scripts write their JSON, the check of a ``--name`` for it, and the command
+line of the scripts that read run folders (:func:`records_args`)."""
 
 from __future__ import annotations
 
 import argparse
 import glob
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -27,6 +29,28 @@ def run_folders(parser: argparse.ArgumentParser, patterns: list[str]) -> list[st
             parser.error(f"{pattern!r} matches no run folder")
         folders += found
     return folders
+
+
+def records_args(doc: str, name: str, counts: dict[str, int],
+                 more: Callable[[argparse.ArgumentParser], None] | None = None,
+                 ) -> tuple[argparse.ArgumentParser, argparse.Namespace, list[str]]:
+    """The command line of a script that reads run folders: ``RUN_GLOB ...``, one integer
+    option per entry of ``counts`` (``--window``: its default; each checked >= 1), the options
+    ``more`` adds, and ``--name`` (default ``name``, checked). Returns the parser (for errors
+    about the runs), the arguments and the run folders the globs match, in order."""
+    p = argparse.ArgumentParser(description=doc.splitlines()[0])
+    p.add_argument("runs", nargs="+", metavar="RUN_GLOB")
+    if more is not None:
+        more(p)
+    for flag, default in counts.items():
+        p.add_argument(f"--{flag}", type=int, default=default)
+    p.add_argument("--name", default=name, help="results file name (without .json)")
+    args = p.parse_args()
+    for flag in counts:
+        if getattr(args, flag) < 1:
+            p.error(f"--{flag} {getattr(args, flag)} is invalid; allowed: an integer >= 1")
+    check_result_name(p, args.name)
+    return p, args, run_folders(p, args.runs)
 
 
 def write_result(name: str, table: str, **payload: object) -> Path:

@@ -18,11 +18,10 @@ Prints both tables and writes ``benchmarks/results/<--name>.json``.
 
 from __future__ import annotations
 
-import argparse
 import math
 
 import numpy as np
-from _results import check_result_name, run_folders, write_result
+from _results import records_args, write_result
 
 from lili.experiments.presets import get_preset
 from lili.report.files import load_run
@@ -57,21 +56,13 @@ def paper_row(table: str | None, env_kwargs: dict) -> tuple[float, float] | None
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("runs", nargs="+", metavar="RUN_GLOB")
     tables = sorted(k for k, v in PAPER_TABLES.items() if "parameter" in v)
-    p.add_argument("--paper", choices=tables, help="the paper's table to set beside each group")
-    p.add_argument("--window", type=int, default=400)
-    p.add_argument("--best", type=int, default=200)
-    p.add_argument("--late", type=int, default=300)
-    p.add_argument("--name", default="budget_windows", help="results file name (without .json)")
-    args = p.parse_args()
-    for flag in ("window", "best", "late"):
-        if getattr(args, flag) < 1:
-            p.error(f"--{flag} {getattr(args, flag)} is invalid; allowed: an integer >= 1")
-    check_result_name(p, args.name)
+    p, args, folders = records_args(
+        __doc__, "budget_windows", {"window": 400, "best": 200, "late": 300},
+        lambda q: q.add_argument("--paper", choices=tables,
+                                 help="the paper's table to set beside each group"))
     groups: dict[tuple, list] = {}
-    for folder in run_folders(p, args.runs):
+    for folder in folders:
         run = load_run(folder)
         kwargs = run.config.get("env_kwargs") or {}
         key = (run.algo, tuple(sorted(kwargs.items())), len(run.metrics["return"]))

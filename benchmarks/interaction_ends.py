@@ -13,10 +13,8 @@ that cannot land from one that will not. Prints a table and writes
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
-from _results import check_result_name, run_folders, window_table, write_result
+from _results import records_args, window_table, write_result
 
 from lili.envs.core import env_horizon
 from lili.envs.spec import make_env
@@ -36,16 +34,9 @@ def ends(success: np.ndarray, length: np.ndarray, horizon: int,
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("runs", nargs="+", metavar="RUN_GLOB")
-    p.add_argument("--window", type=int, default=500)
-    p.add_argument("--name", default="interaction_ends", help="results file name (without .json)")
-    args = p.parse_args()
-    if args.window < 1:
-        p.error(f"--window {args.window} is invalid; allowed: an integer >= 1")
-    check_result_name(p, args.name)
+    p, args, folders = records_args(__doc__, "interaction_ends", {"window": 500})
     out, lines = [], []
-    for folder in run_folders(p, args.runs):
+    for folder in folders:
         run = load_run(folder)
         if not run.has_success:
             p.error(f"run {folder} has no success column; allowed: runs of an env with success")

@@ -18,11 +18,9 @@ Writes ``benchmarks/results/<--name>.json``.
 
 from __future__ import annotations
 
-import argparse
-
 import gymnasium as gym
 import numpy as np
-from _results import check_result_name, run_folders, write_result
+from _results import records_args, write_result
 
 import lili  # noqa: F401  (registers the envs)
 from lili.report.files import load_run
@@ -63,16 +61,9 @@ def _tail_mean(values: np.ndarray, last: int) -> float:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("runs", nargs="+", metavar="RUN_GLOB")
-    p.add_argument("--last", type=int, default=100)
-    p.add_argument("--name", default="steer_sides", help="results file name (without .json)")
-    args = p.parse_args()
-    if args.last < 1:
-        p.error(f"--last {args.last} is invalid; allowed: an integer >= 1")
-    check_result_name(p, args.name)
+    p, args, folders = records_args(__doc__, "steer_sides", {"last": 100})
     out, lines = [], []
-    for folder in run_folders(p, args.runs):
+    for folder in folders:
         run = load_run(folder)
         history = (run.config.get("env_kwargs") or {}).get("history", 1)
         if run.env != ENV or history != 1:

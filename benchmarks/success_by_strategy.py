@@ -13,9 +13,7 @@ holds fewer than 5 interactions of that strategy) and writes
 
 from __future__ import annotations
 
-import argparse
-
-from _results import check_result_name, run_folders, window_table, write_result
+from _results import records_args, window_table, write_result
 
 from lili.report.files import load_run
 from lili.report.stats import strategy_names, success_by_strategy
@@ -24,16 +22,7 @@ MIN_SHOTS = 5
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("runs", nargs="+", metavar="RUN_GLOB")
-    p.add_argument("--window", type=int, default=400)
-    p.add_argument("--name", default="success_by_strategy",
-                   help="results file name (without .json)")
-    args = p.parse_args()
-    if args.window < 1:
-        p.error(f"--window {args.window} is invalid; allowed: an integer >= 1")
-    check_result_name(p, args.name)
-    folders = run_folders(p, args.runs)
+    p, args, folders = records_args(__doc__, "success_by_strategy", {"window": 400})
     out, lines = [], []
     for folder in folders:
         run = load_run(folder)

@@ -14,10 +14,8 @@ Prints a table and writes ``benchmarks/results/<--name>.json``.
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
-from _results import check_result_name, run_folders, write_result
+from _results import records_args, write_result
 
 from lili.report.files import load_run
 
@@ -51,18 +49,7 @@ def spread(returns: np.ndarray, sector: np.ndarray, last: int, history: int) -> 
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("runs", nargs="+", metavar="RUN_GLOB")
-    p.add_argument("--last", type=int, default=200)
-    p.add_argument("--history", type=int, default=800)
-    p.add_argument("--name", default="target_spread",
-                   help="results file name (without .json)")
-    args = p.parse_args()
-    for flag in ("last", "history"):
-        if getattr(args, flag) < 1:
-            p.error(f"--{flag} {getattr(args, flag)} is invalid; allowed: an integer >= 1")
-    check_result_name(p, args.name)
-    folders = run_folders(p, args.runs)
+    p, args, folders = records_args(__doc__, "target_spread", {"last": 200, "history": 800})
     out, lines = [], []
     for folder in folders:
         run = load_run(folder)
