@@ -34,10 +34,10 @@ def run_folders(parser: argparse.ArgumentParser, patterns: list[str]) -> list[st
 def records_args(doc: str, name: str, counts: dict[str, int],
                  more: Callable[[argparse.ArgumentParser], None] | None = None,
                  ) -> tuple[argparse.ArgumentParser, argparse.Namespace, list[str]]:
-    """The command line of a script that reads run folders: ``RUN_GLOB ...``, one integer
-    option per entry of ``counts`` (``--window``: its default; each checked >= 1), the options
-    ``more`` adds, and ``--name`` (default ``name``, checked). Returns the parser (for errors
-    about the runs), the arguments and the run folders the globs match, in order."""
+    """The command line of a script that reads run folders: ``RUN_GLOB ...``, the options
+    ``more`` adds, one integer option ``--<flag>`` per entry ``flag: default`` of ``counts``
+    (each checked >= 1), and ``--name`` (default ``name``, checked). Returns the parser (for
+    errors about the runs), the arguments and the run folders the globs match, in order."""
     p = argparse.ArgumentParser(description=doc.splitlines()[0])
     p.add_argument("runs", nargs="+", metavar="RUN_GLOB")
     if more is not None:
