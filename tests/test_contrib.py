@@ -334,3 +334,14 @@ def test_old_configs_load_at_the_retired_fields_defaults():
 def test_old_configs_with_a_variant_name_the_algo_to_use(field, value, match):
     with pytest.raises(ValueError, match=f"^config {field}={value!r} .*{match}"):
         AgentConfig.from_dict({**OLD_DEFAULTS, field: value})
+
+
+def test_contrib_is_told_by_variant_of_alone_and_names_a_core_algo():
+    from lili.agents.registry import CORE_ALGOS, Algo
+
+    assert CONTRIB_ALGOS and all(a.module.startswith("lili.contrib.") for a in TABLE
+                                 if a.name in CONTRIB_ALGOS)
+    assert {a.variant_of for a in TABLE if a.variant_of} <= set(CORE_ALGOS)
+    for module, variant_of in (("lili.contrib.latents", ""), ("lili.agents.lili", "lili")):
+        with pytest.raises(ValueError, match="variant_of"):
+            Algo("x", module, frozenset(), variant_of=variant_of)

@@ -88,8 +88,10 @@ def test_run_folders_of_the_jax_path_are_read_by_lili_report(tmp_path, capsys):
     """SAC through ``lili train --backend jax``; 160 s on the loaded 2-core machine (83
     CPU-seconds), mostly compiling the program for K = 2 and K = 1."""
     assert _train(tmp_path, "--seeds", "0-1", "--algo", "sac") == 0
-    # Seed 1 alone writes the numbers it wrote in the group of two.
+    assert "half speed" not in capsys.readouterr().out
+    # Seed 1 alone writes the numbers it wrote in the group of two, at a price it is told.
     assert _train(tmp_path, "--seed", "1", "--algo", "sac", out="alone") == 0
+    assert "maps a lone seed twice" in capsys.readouterr().out
     _same_metrics(_metrics(tmp_path / "runs" / "PointMass-v0" / "sac" / "seed_1"),
                   _metrics(tmp_path / "alone" / "PointMass-v0" / "sac" / "seed_1"))
     for seed in (0, 1):

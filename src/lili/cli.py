@@ -318,6 +318,8 @@ def _train_jax(args: argparse.Namespace, env_id: str, seeds: list[int], config: 
                env_kwargs: dict[str, Any]) -> int:
     """``lili train --backend jax``: the seeds as one :class:`lili.jax_train.JaxRuns`, each
     with its own run folder. Everything is checked before a folder is written."""
+    import jax
+
     from lili.jax_train import JaxRuns
     from lili.runs import RunLogger
 
@@ -337,6 +339,10 @@ def _train_jax(args: argparse.Namespace, env_id: str, seeds: list[int], config: 
     for seed, (run_dir, _) in zip(seeds, folders, strict=True):
         print(f"training {args.algo} on {env_id} (seed {seed}, JAX) -> {run_dir}"
               + (f" (resumed at interaction {start})" if start else ""))
+    if len(seeds) == 1 and jax.default_backend() == "cpu":
+        print("note: on a CPU the JAX path maps a lone seed twice (its numbers then match any "
+              "group's) and runs at half speed; the Gymnasium path (no --backend) trains one "
+              "seed at full speed")
     try:
         runs.train(args.interactions - start, loggers, progress=not args.no_progress,
                    keep_rows=False)

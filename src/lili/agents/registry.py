@@ -53,6 +53,13 @@ class Algo:
     paper: bool = False
     variant_of: str = ""
 
+    def __post_init__(self) -> None:
+        # "Is contrib" has one source, variant_of; the module must agree with it.
+        if bool(self.variant_of) != self.module.startswith("lili.contrib."):
+            raise ValueError(f"algo {self.name!r}: module {self.module!r} with variant_of="
+                             f"{self.variant_of!r}; allowed: a lili.contrib module with the core "
+                             "algo it subclasses as variant_of, or a core module without one")
+
 
 TABLE: tuple[Algo, ...] = (
     Algo("random", "lili.agents.random_policy", LOOP_FIELDS),
@@ -92,7 +99,7 @@ ALGOS: tuple[str, ...] = tuple(a.name for a in TABLE)
 """Every algo name (``lili train --algo``), in the order reports list them."""
 PAPER_ALGOS: tuple[str, ...] = tuple(a.name for a in TABLE if a.paper)
 """The paper's algos (the env presets run these)."""
-CONTRIB_ALGOS: tuple[str, ...] = tuple(a.name for a in TABLE if a.module.startswith("lili.contrib"))
+CONTRIB_ALGOS: tuple[str, ...] = tuple(a.name for a in TABLE if a.variant_of)
 """The algos of :mod:`lili.contrib`."""
 LILI_VARIANTS: tuple[str, ...] = tuple(a.name for a in TABLE if a.variant_of == "lili")
 """The variants of LILI in :mod:`lili.contrib` (what the ``contrib`` preset runs beside LILI)."""
