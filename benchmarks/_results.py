@@ -62,9 +62,13 @@ def write_result(name: str, table: str, **payload: object) -> Path:
     return path
 
 
-def window_table(title: str, window: int, n_windows: int, lines: list[str]) -> str:
-    """A markdown table of per-run rows ``lines`` over consecutive windows of ``window``
-    interactions, under ``title`` (the column heads name each window's interactions)."""
+def window_table(title: str, window: int, rows: list[tuple[str, list[str]]]) -> str:
+    """A markdown table of per-run ``rows`` (the run, then one cell per consecutive window of
+    ``window`` interactions), under ``title``; a shorter run's row ends in empty cells, so every
+    row has the longest run's columns (the column heads name each window's interactions)."""
+    n_windows = max(len(cells) for _, cells in rows)
     head = [f"{k * window}-{(k + 1) * window - 1}" for k in range(n_windows)]
+    lines = [f"| {run} | " + " | ".join(cells + [""] * (n_windows - len(cells))) + " |"
+             for run, cells in rows]
     return "\n".join([f"{title}, windows of {window} interactions", "",
                       "| run | " + " | ".join(head) + " |", "|---|" + "---|" * n_windows, *lines])

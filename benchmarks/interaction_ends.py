@@ -35,7 +35,7 @@ def ends(success: np.ndarray, length: np.ndarray, horizon: int,
 
 def main() -> None:
     p, args, folders = records_args(__doc__, "interaction_ends", {"window": 500})
-    out, lines = [], []
+    out, rows = [], []
     for folder in folders:
         run = load_run(folder)
         if not run.has_success:
@@ -47,13 +47,11 @@ def main() -> None:
         horizon = env_horizon(env)
         env.close()
         shares = ends(run.metrics["success"], run.metrics["length"], horizon, args.window)
-        lines.append(f"| {folder} | " + " | ".join(
-            " / ".join(f"{100 * s:3.0f}" for s in w) for w in shares) + " |")
+        rows.append((folder, [" / ".join(f"{100 * s:3.0f}" for s in w) for w in shares]))
         out.append({"run": folder, "env": run.env, "algo": run.algo, "seed": run.seed,
                     "horizon": horizon, "window": args.window, "shares": shares})
     table = window_table("% of interactions that succeeded / failed early / reached the horizon "
-                         "without success", args.window, max(len(o["shares"]) for o in out),
-                         lines)
+                         "without success", args.window, rows)
     write_result(args.name, table, runs=out)
 
 

@@ -23,7 +23,7 @@ MIN_SHOTS = 5
 
 def main() -> None:
     p, args, folders = records_args(__doc__, "success_by_strategy", {"window": 400})
-    out, lines = [], []
+    out, rows = [], []
     for folder in folders:
         run = load_run(folder)
         try:
@@ -33,11 +33,11 @@ def main() -> None:
         names = strategy_names(run.env, counts.shape[1])
         cells = [" / ".join(f"{100 * ok / n:3.0f}" if n >= MIN_SHOTS else "  -"
                             for ok, n in w) for w in counts]
-        lines.append(f"| {folder} | " + " | ".join(cells) + " |")
+        rows.append((folder, cells))
         out.append({"run": folder, "env": run.env, "algo": run.algo, "seed": run.seed,
                     "strategies": names, "window": args.window, "counts": counts.tolist()})
     table = window_table(f"success % per strategy ({' / '.join(out[0]['strategies'])})",
-                         args.window, max(len(o["counts"]) for o in out), lines)
+                         args.window, rows)
     write_result(args.name, table, runs=out)
 
 

@@ -83,15 +83,19 @@ def test_interaction_ends_shares_and_real_lunar_lander_records(tmp_path: Path,
     ends = _script("interaction_ends").ends
     success, length = np.array([1, 0, 0, 0, 1]), np.array([30, 60, 12, 60, 60])
     assert ends(success, length, 60, 4) == [[0.25, 0.25, 0.5], [1.0, 0.0, 0.0]]
-    slac, sac = _run_on_records(
+    result = _run_on_records(
         "interaction_ends", ["s36/lunar-lander-horizon-4000/LunarLander-v0/slac/seed_1",
                              "s24/lunar-lander-horizon/LunarLander-v0/sac/seed_1"],
-        tmp_path, monkeypatch, "--window", "1000")["runs"]
+        tmp_path, monkeypatch, "--window", "1000")
+    (slac, sac), table = result["runs"], result["table"]
     # SLAC still hovers to the horizon in a sixth or more of its interactions at 4000; SAC
     # at 2000 seldom does. The shares of a window add up to one.
     assert slac["horizon"] == sac["horizon"] == 60 and len(slac["shares"]) == 4
     assert min(w[2] for w in slac["shares"]) > 0.1 > max(w[2] for w in sac["shares"])
     assert all(abs(sum(w) - 1) < 1e-9 for w in slac["shares"] + sac["shares"])
+    # The shorter run's row ends in empty cells: every row has the header's columns.
+    rows = [line for line in table.splitlines() if line.startswith("| ")]
+    assert len({line.count("|") for line in rows}) == 1 and rows[2].endswith("|  |  |")
 
 
 def test_target_spread_on_real_oracle_records(tmp_path: Path, monkeypatch) -> None:
