@@ -302,3 +302,32 @@ def test_the_obs_critic_variant_reads_slacs_critic_input_and_the_frame_at_t():
                    core._x(norm, jnp.stack([k_of, t + 1], -1), t + 1))
     np.testing.assert_allclose(out["x_critic_next"][..., -dx:], nxt, rtol=1e-6)
     assert out["last"].any() and (~out["last"]).any()
+
+
+def test_the_frame_actor_variant_reads_the_current_frame_and_keeps_slacs_model_and_critic():
+    """slac-frame-actor (lili.contrib.slac): its actor reads the last of SLAC's K frames and no
+    action, in training and acting alike; its critic inputs and model are SLAC's."""
+    cfg = {**FAST, "extra": {"slac-frame-actor": TINY}}
+    variant = make_agent("slac-frame-actor", gym.make("lili/PointMass-v0"),
+                         AgentConfig.from_dict(cfg))
+    plain = _tiny()
+    assert isinstance(variant, SLAC) and variant.algo == "slac-frame-actor"
+    jax.tree.map(np.testing.assert_array_equal, variant.state.aux["slac"], plain.state.aux["slac"])
+    core, dx = variant.core, variant.core.x_dim
+    assert core._input_dims() == (plain.core._input_dims()[0], dx)
+    buf = _labelled_buffer([12, 5, 12, 9, 3, 12], horizon=plain.core.horizon)
+    args = (buf.arrays, jnp.asarray(buf.count), jax.random.PRNGKey(5))
+    out = {k: np.asarray(v) for k, v in core._batch(variant.state, *args).items() if k != "model"}
+    ref = {k: np.asarray(v) for k, v in plain.core._batch(plain.state, *args).items()
+           if k != "model"}
+    for key in ("x_critic", "x_critic_next"):
+        np.testing.assert_array_equal(out[key], ref[key])
+    for key in ("x_actor", "x_actor_next"):  # SLAC's: K frames, then K - 1 actions
+        np.testing.assert_array_equal(out[key], ref[key][..., (K - 1) * dx:K * dx])
+    state = variant.initial_state()
+    for t in range(3):
+        obs = np.array([t + 1.0, -1.0 - t], np.float32)
+        x = core.history_x(variant.state.norm, *core.acting_input(obs, state))
+        np.testing.assert_array_equal(np.asarray(x), np.asarray(
+            core._x(variant.state.norm, jnp.asarray(obs), jnp.asarray(float(t)))))
+        _, state = variant.predict(obs, state, deterministic=False, key=jax.random.PRNGKey(t))

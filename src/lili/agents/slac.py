@@ -325,6 +325,10 @@ class SLACCore(SACCore):
     default_boundary = "bootstrap"
     options_key: ClassVar[str] = "slac"
     """Where the options live: ``config.extra[options_key]`` (a variant reads its own)."""
+    actor_frames: ClassVar[int | None] = None
+    """How many of the K history frames the actor reads (the last ones, with the actions
+    between them); None: all K, SLAC's. A variant reads fewer while the model and the
+    critic's filter keep K."""
 
     def __init__(self, obs_dim: int, act_dim: int, horizon: int, config: AgentConfig,
                  boundary: str | None = None) -> None:
@@ -344,8 +348,19 @@ class SLACCore(SACCore):
         self.opt_slac = optax.adam(o.lr_model)
 
     def _input_dims(self) -> tuple[int, int]:
-        o, k, phase = self.options, self.seq_len, int(self.config.phase_feature)
+        o, phase = self.options, int(self.config.phase_feature)
+        k = self._actor_k()
         return o.z1_dim + o.z2_dim + phase, k * self.x_dim + (k - 1) * self.act_dim
+
+    def _actor_k(self) -> int:
+        return min(self.actor_frames or self.seq_len, self.seq_len)
+
+    def _actor_in(self, frames: jax.Array, actions: jax.Array) -> jax.Array:
+        """The actor's input from K frames [..., K, dx] and the K - 1 actions between them: the
+        last :meth:`_actor_k` frames and the actions between those (:func:`actor_input`)."""
+        k = self._actor_k()
+        return actor_input(frames[..., frames.shape[-2] - k:, :],
+                           actions[..., actions.shape[-2] - (k - 1):, :])
 
     def _init_aux(self, key: jax.Array) -> dict[str, Any]:
         # One compiled call: run eagerly, every initialiser compiles on its own (~15 s here).
@@ -473,16 +488,16 @@ class SLACCore(SACCore):
         x_hist = self._frames_x(norm, batch["hist_obs"], batch["hist_t"], batch["hist_valid"])
         acts = batch["hist_act"]
         pad_x = jnp.zeros((b, k - 1, self.x_dim))
-        first_hist = actor_input(jnp.concatenate([pad_x, x_first[:, None]], 1),
-                                 jnp.zeros((b, k - 1, self.act_dim)))
+        first_hist = self._actor_in(jnp.concatenate([pad_x, x_first[:, None]], 1),
+                                    jnp.zeros((b, k - 1, self.act_dim)))
         x_next = jnp.where(last, x_first[:, None], x_hist[..., k, :])
         out = {key_: batch[key_] for key_ in ("act", "rew", "t", "last", "index")}
         out.update(
             x_critic=self._critic_in(z_t, batch["t"], x_hist[..., k - 1, :]),
-            x_actor=actor_input(x_hist[..., :k, :], acts[..., : k - 1, :]),
+            x_actor=self._actor_in(x_hist[..., :k, :], acts[..., : k - 1, :]),
             x_critic_next=self._critic_in(z_next, t_next, x_next),
             x_actor_next=jnp.where(last, first_hist[:, None],
-                                   actor_input(x_hist[..., 1:, :], acts[..., 1:, :])),
+                                   self._actor_in(x_hist[..., 1:, :], acts[..., 1:, :])),
             model=self._model_batch(arrays, count, k_model),
         )
         return out
@@ -574,7 +589,7 @@ class SLACCore(SACCore):
                   act: jax.Array) -> jax.Array:
         """The actor's input from K frames (raw obs [K, od], steps [K], valid [K]) and K-1
         actions (what ``_batch`` builds from the buffer for the same step)."""
-        return actor_input(self._frames_x(norm, obs, t, valid), act * valid[:-1, None])
+        return self._actor_in(self._frames_x(norm, obs, t, valid), act * valid[:-1, None])
 
     def acting_input(self, obs: jax.Array, acting: ActingState):
         """(frames [K, od], steps [K], valid [K], actions [K-1, ad]) the actor reads at

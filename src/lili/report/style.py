@@ -28,6 +28,7 @@ ALGO_LABELS = {
     "lili-set-encoder": "LILI (set encoder)",
     "lili-critic-ln": "LILI (critic LayerNorm)",
     "slac-obs-critic": "SLAC (critic reads the observation)",
+    "slac-frame-actor": "SLAC (actor reads one frame)",
 }
 ALGO_COLORS = {
     "random": "#7f7f7f",
