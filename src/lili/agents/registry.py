@@ -90,7 +90,7 @@ TABLE: tuple[Algo, ...] = (
          variant_of="lili"),
     # Lunar Lander's SLAC hovers (issue 34): its critic reads the observation beside the latent.
     Algo("slac-obs-critic", "lili.contrib.slac", SAC_FIELDS, variant_of="slac"),
-    # ... and its actor reads one frame while the model keeps SLAC's K (not yet measured).
+    # ... and its actor reads one frame while the model keeps SLAC's K.
     Algo("slac-frame-actor", "lili.contrib.slac", SAC_FIELDS, variant_of="slac"),
 )
 """Every algo, in display order."""
