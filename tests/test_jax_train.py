@@ -106,7 +106,7 @@ def test_run_folders_of_the_jax_path_are_read_by_lili_report(tmp_path, capsys):
         assert list((run / "tb").glob("events.out.tfevents.*"))
     assert cli.main(["report", str(tmp_path / "runs"), "--out", str(tmp_path / "report")]) == 0
     out = capsys.readouterr().out
-    assert "sac" in out
+    assert "| SAC | 2 |" in out  # the report's row: both seeds
     assert (tmp_path / "report").is_dir()
 
 
