@@ -272,22 +272,25 @@ def test_cli_train_and_resume_give_the_numbers_of_an_uninterrupted_run(tmp_path,
     assert lili_train(tmp_path / "full") == 2  # an existing run is not overwritten
 
 
+def _variant_batches(algo: str):
+    """A tiny SLAC variant ``algo`` (same model as a tiny SLAC's), and the RL batches it and SLAC
+    build from one labelled buffer with one key (model batches left out)."""
+    variant = make_agent(algo, gym.make("lili/PointMass-v0"),
+                         AgentConfig.from_dict({**FAST, "extra": {algo: TINY}}))
+    plain = _tiny()
+    assert isinstance(variant, SLAC) and variant.algo == algo
+    jax.tree.map(np.testing.assert_array_equal, variant.state.aux["slac"], plain.state.aux["slac"])
+    buf = _labelled_buffer([12, 5, 12, 9, 3, 12], horizon=plain.core.horizon)
+    args = (buf.arrays, jnp.asarray(buf.count), jax.random.PRNGKey(5))
+    return variant, *({k: np.asarray(v) for k, v in agent.core._batch(agent.state, *args).items()
+                       if k != "model"} for agent in (variant, plain))
+
+
 def test_the_obs_critic_variant_reads_slacs_critic_input_and_the_frame_at_t():
     """slac-obs-critic (lili.contrib.slac): its critic input is SLAC's ([z, phase]) followed by
     the network frame of the observation at t; the target's, by the frame at t + 1, or the next
     interaction's first frame after an interaction's last step."""
-    cfg = {**FAST, "extra": {"slac-obs-critic": TINY}}
-    variant = make_agent("slac-obs-critic", gym.make("lili/PointMass-v0"),
-                         AgentConfig.from_dict(cfg))
-    plain = _tiny()
-    assert isinstance(variant, SLAC) and variant.algo == "slac-obs-critic"
-    jax.tree.map(np.testing.assert_array_equal, variant.state.aux["slac"], plain.state.aux["slac"])
-    buf = _labelled_buffer([12, 5, 12, 9, 3, 12], horizon=plain.core.horizon)
-    args = (buf.arrays, jnp.asarray(buf.count), jax.random.PRNGKey(5))
-    out = {k: np.asarray(v) for k, v in variant.core._batch(variant.state, *args).items()
-           if k != "model"}
-    ref = {k: np.asarray(v) for k, v in plain.core._batch(plain.state, *args).items()
-           if k != "model"}
+    variant, out, ref = _variant_batches("slac-obs-critic")
     core, norm, dx = variant.core, variant.state.norm, variant.core.x_dim
     assert out["x_critic"].shape[-1] == ref["x_critic"].shape[-1] + dx
     assert core._input_dims()[0] == out["x_critic"].shape[-1]
@@ -307,19 +310,9 @@ def test_the_obs_critic_variant_reads_slacs_critic_input_and_the_frame_at_t():
 def test_the_frame_actor_variant_reads_the_current_frame_and_keeps_slacs_model_and_critic():
     """slac-frame-actor (lili.contrib.slac): its actor reads the last of SLAC's K frames and no
     action, in training and acting alike; its critic inputs and model are SLAC's."""
-    cfg = {**FAST, "extra": {"slac-frame-actor": TINY}}
-    variant = make_agent("slac-frame-actor", gym.make("lili/PointMass-v0"),
-                         AgentConfig.from_dict(cfg))
-    plain = _tiny()
-    assert isinstance(variant, SLAC) and variant.algo == "slac-frame-actor"
-    jax.tree.map(np.testing.assert_array_equal, variant.state.aux["slac"], plain.state.aux["slac"])
+    variant, out, ref = _variant_batches("slac-frame-actor")
     core, dx = variant.core, variant.core.x_dim
-    assert core._input_dims() == (plain.core._input_dims()[0], dx)
-    buf = _labelled_buffer([12, 5, 12, 9, 3, 12], horizon=plain.core.horizon)
-    args = (buf.arrays, jnp.asarray(buf.count), jax.random.PRNGKey(5))
-    out = {k: np.asarray(v) for k, v in core._batch(variant.state, *args).items() if k != "model"}
-    ref = {k: np.asarray(v) for k, v in plain.core._batch(plain.state, *args).items()
-           if k != "model"}
+    assert core._input_dims() == (_tiny().core._input_dims()[0], dx)
     for key in ("x_critic", "x_critic_next"):
         np.testing.assert_array_equal(out[key], ref[key])
     for key in ("x_actor", "x_actor_next"):  # SLAC's: K frames, then K - 1 actions
