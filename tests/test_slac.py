@@ -312,7 +312,7 @@ def test_the_frame_actor_variant_reads_the_current_frame_and_keeps_slacs_model_a
     action, in training and acting alike; its critic inputs and model are SLAC's."""
     variant, out, ref = _variant_batches("slac-frame-actor")
     core, dx = variant.core, variant.core.x_dim
-    assert core._input_dims() == (_tiny().core._input_dims()[0], dx)
+    assert core._input_dims() == (ref["x_critic"].shape[-1], dx)
     for key in ("x_critic", "x_critic_next"):
         np.testing.assert_array_equal(out[key], ref[key])
     for key in ("x_actor", "x_actor_next"):  # SLAC's: K frames, then K - 1 actions
