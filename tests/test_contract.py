@@ -27,7 +27,8 @@ CONFIG = AgentConfig(hidden=(16, 16), enc_hidden=(8, 8), latent_dim=2, warmup_in
                      batch_interactions=4, per_interaction=2, encoder_transitions=3,
                      checkpoint_every=2,
                      extra={"slac": TINY_SLAC, "slac-obs-critic": TINY_SLAC,
-                            "slac-frame-actor": TINY_SLAC,
+                            "slac-frame-actor": TINY_SLAC, "slac-mean-critic": TINY_SLAC,
+                            "slac-frame-critic": TINY_SLAC,
                             "lilac": {"prior_window": 1}})
 """One config for every algo; each is made with the part it reads (``config_for``)."""
 N = 5  # interactions per run

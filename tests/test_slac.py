@@ -13,7 +13,7 @@ import yaml
 import lili.envs  # noqa: F401  (registers the envs)
 from lili import cli
 from lili.agents import SLAC, ActingState, LatentState, load_agent, make_agent
-from lili.agents.slac import sample_sequences
+from lili.agents.slac import LatentModel, sample_sequences
 from lili.buffer import InteractionBuffer
 from lili.config import AgentConfig
 from lili.runs import RunLogger, load_checkpoint
@@ -286,25 +286,87 @@ def _variant_batches(algo: str):
                        if k != "model"} for agent in (variant, plain))
 
 
+def _frames_at_t_and_next(variant, out):
+    """The network frames of the batch's observations at t and at t + 1 (the next interaction's
+    first after an interaction's last step), from the labelled buffer's (k, s) observations."""
+    core, norm = variant.core, variant.state.norm
+    k_of = np.broadcast_to(out["index"][:, None], out["t"].shape).astype(np.float32)
+    t = out["t"].astype(np.float32)
+    at_t = core._x(norm, jnp.stack([k_of, t], -1), t)
+    nxt = np.where(out["last"][..., None], core._x(norm, jnp.stack([k_of + 1, 0 * t], -1), 0.0),
+                   core._x(norm, jnp.stack([k_of, t + 1], -1), t + 1))
+    assert out["last"].any() and (~out["last"]).any()
+    return np.asarray(at_t), nxt
+
+
 def test_the_obs_critic_variant_reads_slacs_critic_input_and_the_frame_at_t():
     """slac-obs-critic (lili.contrib.slac): its critic input is SLAC's ([z, phase]) followed by
     the network frame of the observation at t; the target's, by the frame at t + 1, or the next
     interaction's first frame after an interaction's last step."""
     variant, out, ref = _variant_batches("slac-obs-critic")
-    core, norm, dx = variant.core, variant.state.norm, variant.core.x_dim
+    dx = variant.core.x_dim
     assert out["x_critic"].shape[-1] == ref["x_critic"].shape[-1] + dx
-    assert core._input_dims()[0] == out["x_critic"].shape[-1]
+    assert variant.core._input_dims()[0] == out["x_critic"].shape[-1]
     np.testing.assert_array_equal(out["x_critic"][..., :-dx], ref["x_critic"])
     np.testing.assert_array_equal(out["x_critic_next"][..., :-dx], ref["x_critic_next"])
-    k_of = np.broadcast_to(out["index"][:, None], out["t"].shape).astype(np.float32)
-    t = out["t"].astype(np.float32)
-    at_t = core._x(norm, jnp.stack([k_of, t], -1), t)
-    np.testing.assert_allclose(out["x_critic"][..., -dx:], np.asarray(at_t), rtol=1e-6)
-    last = out["last"][..., None]
-    nxt = np.where(last, core._x(norm, jnp.stack([k_of + 1, 0 * t], -1), 0.0),
-                   core._x(norm, jnp.stack([k_of, t + 1], -1), t + 1))
+    at_t, nxt = _frames_at_t_and_next(variant, out)
+    np.testing.assert_allclose(out["x_critic"][..., -dx:], at_t, rtol=1e-6)
     np.testing.assert_allclose(out["x_critic_next"][..., -dx:], nxt, rtol=1e-6)
-    assert out["last"].any() and (~out["last"]).any()
+
+
+def test_the_frame_critic_variant_reads_the_frame_at_t_and_no_latent():
+    """slac-frame-critic (lili.contrib.slac): its critic reads the network frame at t (the
+    target's at t + 1, or the next interaction's first), as SAC's; its actor inputs are SLAC's."""
+    variant, out, ref = _variant_batches("slac-frame-critic")
+    assert variant.core._input_dims() == (variant.core.x_dim, ref["x_actor"].shape[-1])
+    at_t, nxt = _frames_at_t_and_next(variant, out)
+    np.testing.assert_allclose(out["x_critic"], at_t, rtol=1e-6)
+    np.testing.assert_allclose(out["x_critic_next"], nxt, rtol=1e-6)
+    for key in ("x_actor", "x_actor_next"):
+        np.testing.assert_array_equal(out[key], ref[key])
+
+
+def test_posterior_without_sampling_is_the_filter_on_means():
+    """``posterior(..., sample=False)``: each z1 is q(z1)'s mean and each z2 the transition's
+    mean given the z1 and z2 before it; the key changes nothing."""
+    agent = _tiny()
+    core, params = agent.core, agent.state.aux["slac"]
+    rng = np.random.default_rng(0)
+    x = jnp.asarray(rng.normal(size=(3, 4, core.x_dim)), jnp.float32)
+    a = jnp.asarray(rng.uniform(-1, 1, size=(3, 3, core.act_dim)), jnp.float32)
+    z1, z2, m1, _ = core.posterior(params, x, a, jax.random.PRNGKey(0), sample=False)
+    again = core.posterior(params, x, a, jax.random.PRNGKey(1), sample=False)
+    jax.tree.map(np.testing.assert_array_equal, (z1, z2), again[:2])
+    np.testing.assert_array_equal(z1, m1)
+    m2, _ = core.lvm.apply(params, z1[:, 1], z2[:, 0], a[:, 0], method=LatentModel.z2_transition)
+    np.testing.assert_allclose(z2[:, 1], m2, rtol=1e-6)
+    sampled = core.posterior(params, x, a, jax.random.PRNGKey(0))
+    assert not np.allclose(sampled[0], z1)
+
+
+def test_the_mean_critic_variant_reads_the_filter_on_means():
+    """slac-mean-critic (lili.contrib.slac): its critic reads z_t of the filter run on means over
+    the same window SLAC's samples from, with the phase; its actor inputs are SLAC's."""
+    variant, out, ref = _variant_batches("slac-mean-critic")
+    core = variant.core
+    assert out["x_critic"].shape == ref["x_critic"].shape
+    assert not np.allclose(out["x_critic"], ref["x_critic"])
+    for key in ("x_actor", "x_actor_next"):
+        np.testing.assert_array_equal(out[key], ref[key])
+    # Rebuild the batch's windows as _batch draws them (its first key of four).
+    buf = _labelled_buffer([12, 5, 12, 9, 3, 12], horizon=core.horizon)
+    k_rl = jax.random.split(jax.random.PRNGKey(5), 4)[0]
+    seq = sample_sequences(buf.arrays, jnp.asarray(buf.count), k_rl, FAST["batch_interactions"],
+                           FAST["per_interaction"], K)
+    norm, (b, m) = variant.state.norm, seq["t"].shape
+    x_win = core._frames_x(norm, seq["win_obs"], seq["win_t"], seq["win_valid"])
+    z1, z2, _, _ = core.posterior(variant.state.aux["slac"], x_win.reshape(b * m, K + 1, -1),
+                                  seq["win_act"].reshape(b * m, K, -1), jax.random.PRNGKey(9),
+                                  sample=False)
+    z = jnp.concatenate([z1, z2], -1).reshape(b, m, K + 1, -1)
+    z_t = jnp.take_along_axis(z, seq["pos"][..., None, None], 2)[..., 0, :]
+    np.testing.assert_array_equal(out["t"], np.asarray(seq["t"]))
+    np.testing.assert_allclose(out["x_critic"][..., :-1], np.asarray(z_t), rtol=1e-5, atol=1e-6)
 
 
 def test_the_frame_actor_variant_reads_the_current_frame_and_keeps_slacs_model_and_critic():

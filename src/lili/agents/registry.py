@@ -92,6 +92,9 @@ TABLE: tuple[Algo, ...] = (
     Algo("slac-obs-critic", "lili.contrib.slac", SAC_FIELDS, variant_of="slac"),
     # ... and its actor reads one frame while the model keeps SLAC's K.
     Algo("slac-frame-actor", "lili.contrib.slac", SAC_FIELDS, variant_of="slac"),
+    # ... and its critic reads the filter's means / the current frame with no latent.
+    Algo("slac-mean-critic", "lili.contrib.slac", SAC_FIELDS, variant_of="slac"),
+    Algo("slac-frame-critic", "lili.contrib.slac", SAC_FIELDS, variant_of="slac"),
 )
 """Every algo, in display order."""
 

@@ -228,6 +228,11 @@ def sample_sequences(arrays: dict[str, jax.Array], count: jax.Array, key: jax.Ar
     return jax.lax.optimization_barrier(batch)
 
 
+def _noise(key: jax.Array, shape: tuple[int, ...], sample: bool) -> jax.Array:
+    """Standard normal noise for a reparameterised draw, or zeros (the draw is its mean)."""
+    return jax.random.normal(key, shape) if sample else jnp.zeros(shape)
+
+
 def actor_input(frames: jax.Array, actions: jax.Array) -> jax.Array:
     """The actor's input: K (normalised, zero-padded) frames [..., K, dx] and the K-1 actions
     between them [..., K-1, ad], flattened and concatenated. Used for training and acting alike.
@@ -329,6 +334,9 @@ class SLACCore(SACCore):
     """How many of the K history frames the actor reads (the last ones, with the actions
     between them); None: all K, SLAC's. A variant reads fewer while the model and the
     critic's filter keep K."""
+    critic_samples: ClassVar[bool] = True
+    """Whether the critic reads a sample of the filter's belief (SLAC's) or, False, the
+    filter run on means: every draw of z1 and z2 on the critic's path set to its mean."""
 
     def __init__(self, obs_dim: int, act_dim: int, horizon: int, config: AgentConfig,
                  boundary: str | None = None) -> None:
@@ -385,17 +393,19 @@ class SLACCore(SACCore):
         its width is :meth:`_input_dims`'s first)."""
         return self._critic_x(z, t)
 
-    def posterior(self, params: Params, x: jax.Array, a: jax.Array, key: jax.Array):
+    def posterior(self, params: Params, x: jax.Array, a: jax.Array, key: jax.Array,
+                  sample: bool = True):
         """Filter a sequence: frames ``x`` [N, T+1, dx], actions ``a`` [N, T, ad].
 
         Returns reparameterised samples z1 [N, T+1, z1], z2 [N, T+1, z2] and q(z1)'s (mean,
-        std), each [N, T+1, z1]. Frame 0 uses the first-step distributions.
+        std), each [N, T+1, z1]. Frame 0 uses the first-step distributions. ``sample=False``
+        draws zero noise: each z is its distribution's mean given the means before it.
         """
         lvm, o = self.lvm, self.options
         n, frames = x.shape[0], x.shape[1]
         k1, k2 = jax.random.split(key)
-        e1 = jax.random.normal(k1, (frames, n, o.z1_dim))
-        e2 = jax.random.normal(k2, (frames, n, o.z2_dim))
+        e1 = _noise(k1, (frames, n, o.z1_dim), sample)
+        e2 = _noise(k2, (frames, n, o.z2_dim), sample)
         feat = lvm.apply(params, x, method=LatentModel.features)
         m1, s1 = lvm.apply(params, feat[:, 0], method=LatentModel.first_posterior)
         z1 = m1 + s1 * e1[0]
@@ -468,7 +478,8 @@ class SLACCore(SACCore):
         b, m = batch["t"].shape
         flat = lambda v: v.reshape(b * m, *v.shape[2:])  # noqa: E731
         x_win = self._frames_x(norm, batch["win_obs"], batch["win_t"], batch["win_valid"])
-        z1, z2, _, _ = self.posterior(params, flat(x_win), flat(batch["win_act"]), k_z)
+        z1, z2, _, _ = self.posterior(params, flat(x_win), flat(batch["win_act"]), k_z,
+                                      self.critic_samples)
         z = jnp.concatenate([z1, z2], -1).reshape(b, m, k + 1, -1)
         pos = batch["pos"][..., None, None]
         z_t = jnp.take_along_axis(z, pos, 2)[..., 0, :]
@@ -478,9 +489,10 @@ class SLACCore(SACCore):
         feat = self.lvm.apply(params, x_first, method=LatentModel.features)
         mf, sf = self.lvm.apply(params, feat, method=LatentModel.first_posterior)
         kf1, kf2 = jax.random.split(k_first)
-        zf1 = mf + sf * jax.random.normal(kf1, mf.shape)
+        zf1 = mf + sf * _noise(kf1, mf.shape, self.critic_samples)
         mf2, sf2 = self.lvm.apply(params, zf1, method=LatentModel.first_z2)
-        z_first = jnp.concatenate([zf1, mf2 + sf2 * jax.random.normal(kf2, mf2.shape)], -1)
+        z_first = jnp.concatenate(
+            [zf1, mf2 + sf2 * _noise(kf2, mf2.shape, self.critic_samples)], -1)
         last = batch["last"][..., None]
         z_next = jnp.where(last, z_first[:, None], z_within)
         t_next = jnp.where(batch["last"], 0, batch["t"] + 1)

@@ -6,8 +6,14 @@
 - ``slac-frame-actor``: SLAC whose actor reads the current frame only, as SAC's, while the
   latent model trains on and the critic's filter runs over SLAC's K + 1 frames. Everything
   else is SLAC's.
+- ``slac-mean-critic``: SLAC whose critic reads the filter run on means (every z1 and z2 its
+  distribution's mean given the means before it) instead of a sample of the belief. The model's
+  own training still samples; everything else is SLAC's.
+- ``slac-frame-critic``: SLAC whose critic reads the current frame only (normalised observation
+  and phase), as SAC's, and no latent; the actor keeps SLAC's K frames, and the model still
+  trains though nothing reads it. Everything else is SLAC's.
 
-Why it exists: on Lunar Lander SLAC plays many interactions to the horizon without landing
+Why they exist: on Lunar Lander SLAC plays many interactions to the horizon without landing
 where SAC, whose critic reads the observation, seldom does (``docs/journal/2026-11-to-12.md``,
 "Lunar Lander SLAC at 4000 interactions"). SLAC's critic sees the lander only through a sample
 of a belief trained to reconstruct it; if that sample blurs what decides a touchdown (height,
@@ -15,7 +21,10 @@ legs' contact), the critic cannot tell landing from hovering. This variant gives
 what SAC's has, so the difference between the two is the latent's. That left the lander
 hovering; so did ``extra.slac.sequence_length: 1`` (an actor of one frame), which also cuts the
 model's sequences to two frames ("Lunar Lander SLAC with one frame"). ``slac-frame-actor``
-shortens the actor's history alone. Each variant's options are SLAC's
+shortens the actor's history alone, and still hovered ("Lunar Lander SLAC whose actor reads one
+frame, its model eight"): what every hovering variant kept was a critic that reads a sampled
+latent. ``slac-mean-critic`` takes the sampling away, ``slac-frame-critic`` the latent.
+Each variant's options are SLAC's
 (:class:`~lili.agents.slac.SLACOptions`), read from ``extra[<its name>]``.
 """
 
@@ -27,7 +36,8 @@ import jax.numpy as jnp
 from lili.agents.registry import register
 from lili.agents.slac import SLAC, SLACCore, SLACOptions
 
-__all__ = ["ObsCriticSLACCore", "ObsCriticSLAC", "FrameActorSLACCore", "FrameActorSLAC"]
+__all__ = ["ObsCriticSLACCore", "ObsCriticSLAC", "FrameActorSLACCore", "FrameActorSLAC",
+           "MeanCriticSLACCore", "MeanCriticSLAC", "FrameCriticSLACCore", "FrameCriticSLAC"]
 
 
 class ObsCriticSLACCore(SLACCore):
@@ -68,3 +78,42 @@ class FrameActorSLAC(SLAC):
 
 
 register("slac-frame-actor", FrameActorSLAC, options=SLACOptions)
+
+
+class MeanCriticSLACCore(SLACCore):
+    """SLAC's core whose critic reads the filter's means, not a sample of its belief."""
+
+    options_key = "slac-mean-critic"
+    critic_samples = False
+
+
+class MeanCriticSLAC(SLAC):
+    """SLAC whose critic reads the filter run on means (``slac-mean-critic``)."""
+
+    algo = "slac-mean-critic"
+    core_cls = MeanCriticSLACCore
+
+
+register("slac-mean-critic", MeanCriticSLAC, options=SLACOptions)
+
+
+class FrameCriticSLACCore(SLACCore):
+    """SLAC's core whose critic input is the frame x_t (observation and phase), no latent."""
+
+    options_key = "slac-frame-critic"
+
+    def _input_dims(self) -> tuple[int, int]:
+        return self.x_dim, super()._input_dims()[1]
+
+    def _critic_in(self, z: jax.Array, t: jax.Array, x: jax.Array) -> jax.Array:
+        return x
+
+
+class FrameCriticSLAC(SLAC):
+    """SLAC whose critic reads the current frame only (``slac-frame-critic``)."""
+
+    algo = "slac-frame-critic"
+    core_cls = FrameCriticSLACCore
+
+
+register("slac-frame-critic", FrameCriticSLAC, options=SLACOptions)

@@ -29,6 +29,8 @@ ALGO_LABELS = {
     "lili-critic-ln": "LILI (critic LayerNorm)",
     "slac-obs-critic": "SLAC (critic reads the observation)",
     "slac-frame-actor": "SLAC (actor reads one frame)",
+    "slac-mean-critic": "SLAC (critic reads the filter's means)",
+    "slac-frame-critic": "SLAC (critic reads one frame)",
 }
 ALGO_COLORS = {
     "random": "#7f7f7f",
