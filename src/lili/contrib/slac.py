@@ -23,8 +23,9 @@ hovering; so did ``extra.slac.sequence_length: 1`` (an actor of one frame), whic
 model's sequences to two frames ("Lunar Lander SLAC with one frame"). ``slac-frame-actor``
 shortens the actor's history alone, and still hovered ("Lunar Lander SLAC whose actor reads one
 frame, its model eight"): what every hovering variant kept was a critic that reads a sampled
-latent. ``slac-mean-critic`` takes the sampling away, ``slac-frame-critic`` the latent.
-Each variant's options are SLAC's
+latent. ``slac-mean-critic`` takes the sampling away and still hovers; ``slac-frame-critic``
+takes the latent away and lands as SAC does ("Lunar Lander SLAC whose critic reads the latent's
+mean or one frame"). Each variant's options are SLAC's
 (:class:`~lili.agents.slac.SLACOptions`), read from ``extra[<its name>]``.
 """
 
