@@ -393,6 +393,16 @@ class SLACCore(SACCore):
         its width is :meth:`_input_dims`'s first)."""
         return self._critic_x(z, t)
 
+    def _first_latent(self, params: Params, feat: jax.Array, e1: jax.Array, e2: jax.Array):
+        """An interaction's first latent from its first frame's features [N, f] and standard
+        noise e1 [N, z1], e2 [N, z2]: z1 from q(z1_0 | x_0), z2 from p(z2_0 | z1_0). Returns
+        (z1, z2, q's mean, q's std)."""
+        lvm = self.lvm
+        m1, s1 = lvm.apply(params, feat, method=LatentModel.first_posterior)
+        z1 = m1 + s1 * e1
+        m2, s2 = lvm.apply(params, z1, method=LatentModel.first_z2)
+        return z1, m2 + s2 * e2, m1, s1
+
     def posterior(self, params: Params, x: jax.Array, a: jax.Array, key: jax.Array,
                   sample: bool = True):
         """Filter a sequence: frames ``x`` [N, T+1, dx], actions ``a`` [N, T, ad].
@@ -407,10 +417,7 @@ class SLACCore(SACCore):
         e1 = _noise(k1, (frames, n, o.z1_dim), sample)
         e2 = _noise(k2, (frames, n, o.z2_dim), sample)
         feat = lvm.apply(params, x, method=LatentModel.features)
-        m1, s1 = lvm.apply(params, feat[:, 0], method=LatentModel.first_posterior)
-        z1 = m1 + s1 * e1[0]
-        m2, s2 = lvm.apply(params, z1, method=LatentModel.first_z2)
-        z2 = m2 + s2 * e2[0]
+        z1, z2, m1, s1 = self._first_latent(params, feat[:, 0], e1[0], e2[0])
 
         def step(z2_prev, inp):
             f, a_prev, n1, n2 = inp
@@ -487,12 +494,11 @@ class SLACCore(SACCore):
         # The next interaction's first step: what the target bootstraps from at the boundary.
         x_first = self._x(norm, batch["next_first_obs"], 0.0)
         feat = self.lvm.apply(params, x_first, method=LatentModel.features)
-        mf, sf = self.lvm.apply(params, feat, method=LatentModel.first_posterior)
         kf1, kf2 = jax.random.split(k_first)
-        zf1 = mf + sf * _noise(kf1, mf.shape, self.critic_samples)
-        mf2, sf2 = self.lvm.apply(params, zf1, method=LatentModel.first_z2)
-        z_first = jnp.concatenate(
-            [zf1, mf2 + sf2 * _noise(kf2, mf2.shape, self.critic_samples)], -1)
+        o, cs = self.options, self.critic_samples
+        zf1, zf2, _, _ = self._first_latent(params, feat, _noise(kf1, (b, o.z1_dim), cs),
+                                            _noise(kf2, (b, o.z2_dim), cs))
+        z_first = jnp.concatenate([zf1, zf2], -1)
         last = batch["last"][..., None]
         z_next = jnp.where(last, z_first[:, None], z_within)
         t_next = jnp.where(batch["last"], 0, batch["t"] + 1)
