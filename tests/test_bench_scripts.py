@@ -55,7 +55,8 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
     ("play_bot", ["a=scripted:greedy"]), ("latent_probe", ["run"]), ("influence", []),
     ("success_by_strategy", ["run"]), ("drift_lagged", []), ("run_cost", []),
     ("boundary_probe", ["run"]), ("target_spread", ["run"]),
-    ("budget_windows", ["run"]), ("steer_sides", ["run"]), ("interaction_ends", ["run"])])
+    ("budget_windows", ["run"]), ("steer_sides", ["run"]), ("interaction_ends", ["run"]),
+    ("greedy_eval", ["run"])])
 @pytest.mark.parametrize("name", ["../x", "/tmp/x", ".hidden", ""])
 def test_result_name_must_be_a_plain_file_name(script: str, args: list[str], name: str,
                                                monkeypatch, capsys) -> None:
@@ -489,3 +490,42 @@ def test_gpu_session_dry_run_lists_each_part_and_writes_nothing(tmp_path: Path) 
     assert bad.returncode == 2 and bad.stdout == ""
     assert bad.stderr.strip() == ("gpu_session.sh: PARTS names 'bogus'; allowed: oracle, sac, "
                                   "long, collapse, critic-ln, variants")
+
+
+def test_greedy_eval_plays_each_checkpoint_sampled_and_deterministic(tmp_path: Path,
+                                                                     monkeypatch,
+                                                                     capsys) -> None:
+    from lili import cli
+    from lili.report.files import load_run
+    from lili.report.stats import final_performance
+
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("warmup_interactions: 3\nhidden: [16]\ncheckpoint_every: 4\n")
+    assert cli.main(["train", "influence-drift", "--algo", "oracle", "--interactions", "8",
+                     "--out", str(tmp_path / "o"), "--config", str(cfg), "--no-progress"]) == 0
+    run = tmp_path / "o" / "InfluenceDrift-v0" / "oracle" / "seed_0"
+    script = _script("greedy_eval")
+    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
+    rows = []
+    for _ in range(2):
+        monkeypatch.setattr("sys.argv", ["x", str(run), "--interactions", "6", "--name", "g"])
+        script.main()
+        rows.append(json.loads((tmp_path / "g.json").read_text())["runs"])
+    (row,) = rows[0]
+    assert rows[0] == rows[1]  # the same checkpoint and env seed play the same interactions
+    assert row["checkpoint"] == 8 and row["algo"] == "oracle"
+    assert row["training"] == final_performance(load_run(run))
+    # Sampling and playing the mean differ; the held shares are shares of Drift's partner.
+    assert row["sampled"] != row["deterministic"]
+    for key in ("training_held", "sampled_held", "deterministic_held"):
+        assert 0.0 <= row[key] <= 1.0
+    # A folder without checkpoints (a committed record) is refused before anything plays.
+    (tmp_path / "g.json").unlink()
+    record = BENCH / "results/runs/s11/influence/InfluenceDrift-v0/oracle/seed_0"
+    monkeypatch.setattr("sys.argv", ["x", str(run), str(record), "--name", "g"])
+    with pytest.raises(SystemExit):
+        script.main()
+    err = capsys.readouterr().err
+    assert f"run {record}: " in err and "has no checkpoint" in err
+    assert err.rstrip().endswith("allowed: a run folder of lili train with its checkpoints")
+    assert not (tmp_path / "g.json").exists()
