@@ -396,7 +396,8 @@ class SLACCore(SACCore):
         its width is :meth:`_input_dims`'s first)."""
         return self._critic_x(z, t)
 
-    def _first_latent(self, params: Params, feat: jax.Array, e1: jax.Array, e2: jax.Array):
+    def _first_latent(self, params: Params, feat: jax.Array, e1: jax.Array, e2: jax.Array
+                      ) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array]:
         """An interaction's first latent from its first frame's features [N, f] and standard
         noise e1 [N, z1], e2 [N, z2]: z1 from q(z1_0 | x_0), z2 from p(z2_0 | z1_0). Returns
         (z1, z2, q's mean, q's std)."""
@@ -407,7 +408,8 @@ class SLACCore(SACCore):
         return z1, m2 + s2 * e2, m1, s1
 
     def posterior(self, params: Params, x: jax.Array, a: jax.Array, key: jax.Array,
-                  sample: bool = True):
+                  sample: bool = True
+                  ) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array]:
         """Filter a sequence: frames ``x`` [N, T+1, dx], actions ``a`` [N, T, ad].
 
         Returns reparameterised samples z1 [N, T+1, z1], z2 [N, T+1, z2] and q(z1)'s (mean,
@@ -612,7 +614,8 @@ class SLACCore(SACCore):
         actions (what ``_batch`` builds from the buffer for the same step)."""
         return self._actor_in(self._frames_x(norm, obs, t, valid), act * valid[:-1, None])
 
-    def acting_input(self, obs: jax.Array, acting: ActingState):
+    def acting_input(self, obs: jax.Array, acting: ActingState
+                     ) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array]:
         """(frames [K, od], steps [K], valid [K], actions [K-1, ad]) the actor reads at
         ``acting.t`` given the current ``obs`` (the same layout training gathers)."""
         k = self.seq_len

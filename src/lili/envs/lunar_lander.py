@@ -169,7 +169,8 @@ class PadLander(gym_ll.LunarLander):
         self.target = 0
         self.mesas: list[Any] = []
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None):
+    def reset(self, *, seed: int | None = None, options: dict | None = None
+              ) -> tuple[np.ndarray, dict[str, Any]]:
         out = super().reset(seed=seed, options=options)
         # Gymnasium's reset builds a fresh Box2D world (the old mesas die with the old one).
         self.mesas = [self._make_mesa(pad) for pad in PADS]
@@ -196,7 +197,7 @@ class PadLander(gym_ll.LunarLander):
         """
         return _HALF_W + float(pad[0]) * _HALF_W, self.helipad_y + float(pad[1]) * _HALF_H
 
-    def render(self):
+    def render(self) -> np.ndarray | None:
         # Gymnasium draws its flags at helipad_x1/x2 and height helipad_y; point them at the
         # target mesa for the duration of the call (step() reads helipad_y for the observation).
         saved = self.helipad_x1, self.helipad_x2, self.helipad_y

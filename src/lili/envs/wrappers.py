@@ -53,12 +53,12 @@ class OracleObservation(gym.ObservationWrapper):
         )
         self._strategy = np.zeros(strat.shape, dtype=np.float32)
 
-    def reset(self, **kwargs: Any):
+    def reset(self, **kwargs: Any) -> tuple[np.ndarray, dict[str, Any]]:
         obs, info = self.env.reset(**kwargs)
         self._strategy = reset_strategy(self.env, info, "the Oracle")
         return self.observation(obs), info
 
-    def step(self, action: Any):
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         obs, reward, terminated, truncated, info = self.env.step(action)
         # Within an interaction the strategy is fixed; the info of the last step already shows
         # the next one, which belongs to the next reset's observation, not to this one.
@@ -124,7 +124,7 @@ class LastInteractionObservation(gym.Wrapper):
         self._outcome = np.zeros(self._sizes[3], np.float32)
         self._started = False
 
-    def reset(self, **kwargs: Any):
+    def reset(self, **kwargs: Any) -> tuple[np.ndarray, dict[str, Any]]:
         obs, info = self.env.reset(**kwargs)
         strategy = reset_strategy(self.env, info, "the last-interaction Oracle")
         if kwargs.get("seed") is not None or not self._started:
@@ -137,7 +137,7 @@ class LastInteractionObservation(gym.Wrapper):
         self._obs = np.asarray(obs, np.float32)
         return self._observation(obs), info
 
-    def step(self, action: Any):
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         obs, reward, terminated, truncated, info = self.env.step(action)
         self._obs = np.asarray(obs, np.float32)
         self._act = np.asarray(action, np.float32).reshape(self._sizes[2])

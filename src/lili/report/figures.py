@@ -6,6 +6,7 @@ import math
 import textwrap
 from collections.abc import Iterable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +21,9 @@ from lili.report.stats import (
     strategy_names,
 )
 from lili.report.style import DPI, algo_color, algo_label, algo_sort_key, env_key, env_title
+
+if TYPE_CHECKING:  # matplotlib is imported lazily (_pyplot): reports that draw nothing skip it
+    from matplotlib.figure import Figure
 
 __all__ = ["plot_learning_curves", "plot_strategy_heatmap", "heatmap_figure",
            "plot_strategy_frequencies"]
@@ -135,7 +139,7 @@ def plot_strategy_heatmap(runs: Iterable[Run], out_png: str | Path, last: int = 
     return out_png
 
 
-def heatmap_figure(runs: Iterable[Run], last: int = 500):
+def heatmap_figure(runs: Iterable[Run], last: int = 500) -> Figure:
     """Where the Point Mass target ends up: a 2-D histogram of (strategy_0, strategy_1).
 
     One panel per (Point Mass env, algo), pooling the last ``last`` interactions of every
