@@ -19,7 +19,6 @@ the three. Prints a table and writes ``benchmarks/results/<--name>.json``.
 
 from __future__ import annotations
 
-import numpy as np
 from _results import records_args, write_result
 
 from lili.agents.base import CheckpointError
@@ -28,14 +27,10 @@ from lili.envs.influence import HELD
 from lili.envs.spec import make_env
 from lili.evaluate import evaluate
 from lili.report.files import load_run
-from lili.report.stats import final_performance, held_share
+from lili.report.stats import final_performance, held_fraction, held_share
 from lili.runs import latest_checkpoint, load_run_agent
 
 MODES = {"sampled": False, "deterministic": True}
-
-
-def _held(ids: list[int], held: tuple[int, ...] | None) -> float | None:
-    return float(np.isin(ids, held).mean()) if held else None
 
 
 def _cell(ret: float, held: float | None) -> str:
@@ -68,7 +63,7 @@ def main() -> None:
             res = evaluate(agent, env, args.interactions, seed=args.seed,
                            deterministic=deterministic)
             row[mode] = res["mean_return"]
-            row[f"{mode}_held"] = _held(res["strategy_ids"], held)
+            row[f"{mode}_held"] = held_fraction(res["strategy_ids"], held) if held else None
         env.close()
         out.append(row)
         lines.append(f"| {folder} | {at} | {_cell(row['training'], row['training_held'])} | "

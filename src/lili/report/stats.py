@@ -19,7 +19,8 @@ from lili.report.style import algo_sort_key, env_sort_key
 
 __all__ = ["final_performance", "mean_se", "summarize", "group_runs", "moving_average",
            "strategy_frequencies", "success_by_strategy", "strategy_names", "STRATEGY_WINDOW",
-           "gap_closed", "gap_share", "held_share", "iqm", "iqm_ci", "probability_of_improvement",
+           "gap_closed", "gap_share", "held_share", "held_fraction", "iqm", "iqm_ci",
+           "probability_of_improvement",
            "probability_of_improvement_ci", "BOOTSTRAP_RESAMPLES", "BOOTSTRAP_SEED",
            "CONFIDENCE"]
 
@@ -184,7 +185,13 @@ def held_share(run: Run, held: Sequence[int], frac: float = 0.1) -> float | None
     ids = run.metrics.get("strategy_id")
     if ids is None or run.n_interactions == 0:
         return None
-    ids = ids[-final_window(run.n_interactions, frac):]
+    return held_fraction(ids[-final_window(run.n_interactions, frac):], held)
+
+
+def held_fraction(ids: Sequence[float], held: Sequence[int]) -> float | None:
+    """The share of strategy ids ``ids`` that are one of ``held``, counted over the ids that
+    are logged (not NaN, not the -1 of an interaction without one); None when none is."""
+    ids = np.asarray(ids, dtype=np.float64)
     ids = ids[~np.isnan(ids) & (ids >= 0)]
     return float(np.isin(ids, held).mean()) if ids.size else None
 
