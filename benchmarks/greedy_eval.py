@@ -21,14 +21,11 @@ from __future__ import annotations
 
 from _results import records_args, write_result
 
-from lili.agents.base import CheckpointError
-from lili.config import AgentConfig
 from lili.envs.influence import HELD
-from lili.envs.spec import make_env
 from lili.evaluate import evaluate
 from lili.report.files import load_run
 from lili.report.stats import final_performance, held_fraction, held_share
-from lili.runs import latest_checkpoint, load_run_agent
+from lili.runs import load_trained
 
 MODES = {"sampled": False, "deterministic": True}
 
@@ -46,11 +43,8 @@ def main() -> None:
     for folder in folders:  # every run checked before any plays: a bad one costs no time
         try:
             run = load_run(folder)
-            ck, at = latest_checkpoint(folder)
-            env = make_env(run.env, run.config.get("env_kwargs"))
-            agent = load_run_agent(ck, folder, env, run.algo,
-                                   AgentConfig.from_dict(run.config["agent"]))
-        except (CheckpointError, TypeError, ValueError) as e:
+            agent, env, _, at = load_trained(folder)
+        except ValueError as e:
             p.error(f"run {folder}: {e}; allowed: a run folder of lili train with its checkpoints")
         loaded.append((folder, run, at, env, agent))
     out, lines = [], []

@@ -360,9 +360,8 @@ def _train_jax(args: argparse.Namespace, env_id: str, seeds: list[int], config: 
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
-    from lili.config import AgentConfig
     from lili.evaluate import evaluate
-    from lili.runs import latest_checkpoint, load_run_agent, read_run_config
+    from lili.runs import load_trained
 
     _check_interactions(args.interactions)
     _check_seed(args.seed)
@@ -371,15 +370,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
 
         check_video_path(args.video)
     run_dir = Path(args.run)
-    cfg = read_run_config(run_dir)
-    ck, _ = latest_checkpoint(run_dir)
-    env = _make_env(cfg["env"], cfg.get("env_kwargs", {}),
-                    "rgb_array" if args.video else None)
-    try:
-        stored = AgentConfig.from_dict(cfg["agent"])
-    except (TypeError, ValueError) as e:
-        raise UsageError(f"{run_dir / 'config.yaml'}: agent: {e}") from None
-    agent = load_run_agent(ck, run_dir, env, cfg["algo"], stored)
+    agent, env, cfg, _ = load_trained(run_dir, "rgb_array" if args.video else None)
     frames: list | None = [] if args.video else None
     res = evaluate(agent, LabelledFrames(env) if args.video else None, args.interactions,
                    seed=args.seed, frames=frames)

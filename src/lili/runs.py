@@ -53,7 +53,7 @@ from lili.yaml_bounds import YAMLTooLarge, safe_load
 
 __all__ = ["RunLogger", "run_dir_for", "load_checkpoint", "METRIC_COLUMNS", "final_mean",
            "final_window", "latest_checkpoint", "read_run_config", "metric_columns",
-           "resume_run", "check_out_dir", "load_run_agent"]
+           "resume_run", "check_out_dir", "load_run_agent", "load_trained"]
 
 
 def check_out_dir(path: str | Path, flag: str = "--out") -> Path:
@@ -196,6 +196,29 @@ def load_run_agent(ck: Path, run_dir: str | Path, env: Any, algo: str,
     if loaded.config != config:
         raise CheckpointError(f"{ck} was trained with another agent config than {run_dir}")
     return loaded
+
+
+def load_trained(run_dir: str | Path, render_mode: str | None = None
+                 ) -> tuple[SAC, Any, dict[str, Any], int]:
+    """The agent of run folder ``run_dir``'s newest checkpoint on a fresh env of the run's
+    config: (agent, env, resolved config, interactions the checkpoint holds), for playing a
+    trained run (``lili eval``, ``benchmarks/greedy_eval.py``). ValueError (CheckpointError)
+    naming the file when the folder, its config, its checkpoint or the agent in it does not
+    fit; the env made for it is closed then."""
+    from lili.envs.spec import make_env
+
+    cfg = read_run_config(run_dir)
+    ck, at = latest_checkpoint(run_dir)
+    env = make_env(cfg["env"], cfg.get("env_kwargs", {}), render_mode)
+    try:
+        try:
+            stored = AgentConfig.from_dict(cfg["agent"])
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"{Path(run_dir) / 'config.yaml'}: agent: {e}") from None
+        return load_run_agent(ck, run_dir, env, cfg["algo"], stored), env, cfg, at
+    except ValueError:
+        env.close()
+        raise
 
 
 def load_checkpoint(run_dir: str | Path, agent: SAC, stream: Stream) -> int:
