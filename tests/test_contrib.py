@@ -345,3 +345,19 @@ def test_contrib_is_told_by_variant_of_alone_and_names_a_core_algo():
     for module, variant_of in (("lili.contrib.latents", ""), ("lili.agents.lili", "lili")):
         with pytest.raises(ValueError, match="variant_of"):
             Algo("x", module, frozenset(), variant_of=variant_of)
+
+
+def test_flat_encoder_critic_ln_has_the_flat_encoder_and_the_layer_normed_critic():
+    agent, core, state, batch = _point_mass_lili("lili-flat-encoder-critic-ln")
+    flat = make_agent("lili-flat-encoder", gym.make("lili/PointMass-v0"), SMALL, seed=3)
+    ln = make_agent("lili-critic-ln", gym.make("lili/PointMass-v0"), SMALL, seed=3)
+    assert core.window_steps is None
+    # Each network has the structure of the variant it is taken from, and not the other's.
+    for part, same, other in (("encoder", flat, ln), ("critic", ln, flat)):
+        mine = jax.tree.structure(state.model[part])
+        assert mine == jax.tree.structure(same.state.model[part])
+        assert mine != jax.tree.structure(other.state.model[part])
+    _, metrics = core.update(state, batch, jax.random.PRNGKey(0))
+    assert np.isfinite(float(metrics["critic_loss"])) and np.isfinite(float(metrics["rep_loss"]))
+    with pytest.raises(ValueError, match="encoder_transitions"):
+        check_config("lili-flat-encoder-critic-ln", AgentConfig(encoder_transitions=8))

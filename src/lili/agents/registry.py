@@ -88,6 +88,9 @@ TABLE: tuple[Algo, ...] = (
     # reads all steps, so not encoder_transitions.
     Algo("lili-flat-encoder", "lili.contrib.latents", LATENT_FIELDS - {"encoder_transitions"},
          variant_of="lili"),
+    # ... with lili-critic-ln's critic: is a normalised critic what stops its divergence?
+    Algo("lili-flat-encoder-critic-ln", "lili.contrib.critics",
+         LATENT_FIELDS - {"encoder_transitions"}, variant_of="lili"),
     # Lunar Lander's SLAC hovers (issue 34): its critic reads the observation beside the latent.
     Algo("slac-obs-critic", "lili.contrib.slac", SAC_FIELDS, variant_of="slac"),
     # ... and its actor reads one frame while the model keeps SLAC's K.

@@ -9,15 +9,22 @@ LILI's late collapses": its critic loss rose x1.4 and its Q by 0.4 while its ret
 then x5.9 and +1.1 as the return fell). It sits here, not in the core, until a measurement
 says it costs nothing on the paper's domains (``benchmarks/gpu_session.sh`` trains it on Point
 Mass, seeds 0-13). No options (``extra["lili-critic-ln"]`` may only be empty).
+
+``lili-flat-encoder-critic-ln`` puts the same critic beside ``lili-flat-encoder``'s encoder
+(:mod:`lili.contrib.latents`), whose critic diverges on some seeds of the history partner from
+N = 7 on (``docs/journal/2026-11-to-12.md``, "The flat encoder at N = 7"), to tell whether a
+normalised critic stops that. Not yet measured.
 """
 
 from __future__ import annotations
 
+from lili.contrib.latents import FlatEncoderCore
 from lili.contrib.nets import LayerNormMLP
 from lili.contrib.variant import VariantCore, variant
 from lili.nets import TwinCritic
 
-__all__ = ["CriticLayerNormCore", "CriticLayerNormLILI"]
+__all__ = ["CriticLayerNormCore", "CriticLayerNormLILI", "FlatEncoderCriticLayerNormCore",
+           "FlatEncoderCriticLayerNormLILI"]
 
 
 class CriticLayerNormCore(VariantCore):
@@ -33,3 +40,15 @@ class CriticLayerNormCore(VariantCore):
 
 CriticLayerNormLILI = variant(CriticLayerNormCore, "LILI with LayerNorm in its critic's hidden "
                                                    "layers (``lili-critic-ln``).")
+
+
+class FlatEncoderCriticLayerNormCore(CriticLayerNormCore, FlatEncoderCore):
+    """``lili-flat-encoder``'s core (its encoder, and whole interactions in updates) whose
+    twin critic is ``lili-critic-ln``'s: each parent's ``_build`` replaces its one network."""
+
+    algo = "lili-flat-encoder-critic-ln"
+
+
+FlatEncoderCriticLayerNormLILI = variant(
+    FlatEncoderCriticLayerNormCore, "LILI with the flat encoder and a critic with LayerNorm in "
+                                    "its hidden layers (``lili-flat-encoder-critic-ln``).")
