@@ -41,6 +41,16 @@ __all__ = ["ObsCriticSLACCore", "ObsCriticSLAC", "FrameActorSLACCore", "FrameAct
            "MeanCriticSLACCore", "MeanCriticSLAC", "FrameCriticSLACCore", "FrameCriticSLAC"]
 
 
+def _variant(core: type[SLACCore], doc: str) -> type[SLAC]:
+    """The facade of ``core``, registered under its ``options_key`` (the variant's algo, under
+    which a config's ``extra`` holds its options, SLAC's)."""
+    cls = type(core.__name__.removesuffix("Core"), (SLAC,),
+               {"algo": core.options_key, "core_cls": core, "__doc__": doc,
+                "__module__": __name__})
+    register(core.options_key, cls, options=SLACOptions)
+    return cls
+
+
 class ObsCriticSLACCore(SLACCore):
     """SLAC's core whose critic input is [z, phase, x_t] instead of [z, phase]."""
 
@@ -54,14 +64,8 @@ class ObsCriticSLACCore(SLACCore):
         return jnp.concatenate([self._critic_x(z, t), x], -1)
 
 
-class ObsCriticSLAC(SLAC):
-    """SLAC whose critic reads the observation beside the latent (``slac-obs-critic``)."""
-
-    algo = "slac-obs-critic"
-    core_cls = ObsCriticSLACCore
-
-
-register("slac-obs-critic", ObsCriticSLAC, options=SLACOptions)
+ObsCriticSLAC = _variant(ObsCriticSLACCore, "SLAC whose critic reads the observation beside "
+                                           "the latent (``slac-obs-critic``).")
 
 
 class FrameActorSLACCore(SLACCore):
@@ -71,14 +75,8 @@ class FrameActorSLACCore(SLACCore):
     actor_frames = 1
 
 
-class FrameActorSLAC(SLAC):
-    """SLAC whose actor reads the current frame only (``slac-frame-actor``)."""
-
-    algo = "slac-frame-actor"
-    core_cls = FrameActorSLACCore
-
-
-register("slac-frame-actor", FrameActorSLAC, options=SLACOptions)
+FrameActorSLAC = _variant(FrameActorSLACCore, "SLAC whose actor reads the current frame only "
+                                             "(``slac-frame-actor``).")
 
 
 class MeanCriticSLACCore(SLACCore):
@@ -88,14 +86,8 @@ class MeanCriticSLACCore(SLACCore):
     critic_samples = False
 
 
-class MeanCriticSLAC(SLAC):
-    """SLAC whose critic reads the filter run on means (``slac-mean-critic``)."""
-
-    algo = "slac-mean-critic"
-    core_cls = MeanCriticSLACCore
-
-
-register("slac-mean-critic", MeanCriticSLAC, options=SLACOptions)
+MeanCriticSLAC = _variant(MeanCriticSLACCore, "SLAC whose critic reads the filter run on means "
+                                             "(``slac-mean-critic``).")
 
 
 class FrameCriticSLACCore(SLACCore):
@@ -110,11 +102,5 @@ class FrameCriticSLACCore(SLACCore):
         return x
 
 
-class FrameCriticSLAC(SLAC):
-    """SLAC whose critic reads the current frame only (``slac-frame-critic``)."""
-
-    algo = "slac-frame-critic"
-    core_cls = FrameCriticSLACCore
-
-
-register("slac-frame-critic", FrameCriticSLAC, options=SLACOptions)
+FrameCriticSLAC = _variant(FrameCriticSLACCore, "SLAC whose critic reads the current frame only "
+                                               "(``slac-frame-critic``).")
