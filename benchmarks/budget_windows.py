@@ -12,8 +12,10 @@ and the gap to it in combined standard errors; and how many seeds are still risi
 ``--best``-interaction mean ends within the last ``--late`` interactions. A second table gives
 the mean over seeds of every ``--window`` interactions, so a longer budget can be read against a
 shorter one at the same interactions (the first 2000 interactions of a 4000-interaction run are
-the 2000-interaction run of the same seed where the code did not change between them).
-Prints both tables and writes ``benchmarks/results/<--name>.json``.
+the 2000-interaction run of the same seed where the code did not change between them). A third
+table gives each run's critic loss and mean Q in the same windows, which tell a critic that
+diverges (its loss growing by orders of magnitude, its Q climbing while the return falls) from
+one that learns. Prints the tables and writes ``benchmarks/results/<--name>.json``.
 """
 
 from __future__ import annotations
@@ -29,6 +31,9 @@ from lili.report.paper import PAPER_TABLES
 from lili.report.stats import final_performance, iqm_ci, mean_se
 from lili.report.tables import fmt_interval, fmt_mean_se
 
+CRITIC = ("critic_loss", "q")
+"""The learning metrics the per-run table reads, window by window."""
+
 
 def best_window_end(returns: np.ndarray, width: int) -> int:
     """The interaction (exclusive end) at which the run's best ``width``-interaction mean ends."""
@@ -41,6 +46,22 @@ def best_window_end(returns: np.ndarray, width: int) -> int:
 def window_means(returns: np.ndarray, width: int) -> list[float]:
     """The mean return of each whole ``width``-interaction window from the start."""
     return [float(returns[i:i + width].mean()) for i in range(0, len(returns) - width + 1, width)]
+
+
+def column_windows(values: np.ndarray, width: int) -> list[float | None]:
+    """The mean of a learning metric over each whole ``width``-interaction window from the
+    start, leaving out the rows without an update (empty cells); None for a window without."""
+    out = []
+    for i in range(0, len(values) - width + 1, width):
+        part = values[i:i + width]
+        part = part[~np.isnan(part)]
+        out.append(float(part.mean()) if part.size else None)
+    return out
+
+
+def _num(v: float | None) -> str:
+    """A critic loss or Q, three significant digits (losses span orders of magnitude)."""
+    return "—" if v is None else f"{v:.3g}"
 
 
 def paper_row(table: str | None, env_kwargs: dict) -> tuple[float, float] | None:
@@ -67,7 +88,7 @@ def main() -> None:
         kwargs = run.config.get("env_kwargs") or {}
         key = (run.algo, tuple(sorted(kwargs.items())), len(run.metrics["return"]))
         groups.setdefault(key, []).append((folder, run))
-    out, lines, wlines = [], [], []
+    out, lines, wlines, clines = [], [], [], []
     widest = max(n for _, _, n in groups) // args.window
     for (algo, kwargs, n), runs in sorted(groups.items()):
         setting = ", ".join(f"{k}={v}" for k, v in kwargs) or "-"
@@ -79,7 +100,15 @@ def main() -> None:
             except ValueError as e:
                 p.error(f"{folder}: {e}")
             per_run.append({"run": folder, "seed": run.seed, "final": final_performance(run),
-                            "best_window_end": end, "windows": window_means(returns, args.window)})
+                            "best_window_end": end, "windows": window_means(returns, args.window),
+                            **{f"{k}_windows": column_windows(
+                                np.asarray(run.metrics[k], dtype=float), args.window)
+                               for k in CRITIC}})
+            clines.append(f"| {algo} | {setting} | {run.seed} | {per_run[-1]['final']:.2f} | "
+                          + " | ".join(f"{_num(c)} / {_num(q)}" for c, q in zip(
+                              per_run[-1]["critic_loss_windows"], per_run[-1]["q_windows"],
+                              strict=True))
+                          + " |" * (widest - len(per_run[-1]["windows"]) + 1))
         finals = [r["final"] for r in per_run]
         mean, se = mean_se(finals)
         centre, low, high = iqm_ci(finals)
@@ -111,7 +140,11 @@ def main() -> None:
         "paper | gap | rising |", "|---|---|---:|---:|---:|---:|---:|---:|---|", *lines, "",
         f"mean return over seeds of each {args.window} interactions, by the window's end", "",
         "| algo | partner | interactions | " + " | ".join(heads) + " |",
-        "|---|---|---:|" + "---:|" * widest, *wlines])
+        "|---|---|---:|" + "---:|" * widest, *wlines, "",
+        f"per run: final return, and critic loss / mean Q over each {args.window} interactions "
+        "(rows with an update), by the window's end", "",
+        "| algo | partner | seed | final | " + " | ".join(heads) + " |",
+        "|---|---|---:|---:|" + "---:|" * widest, *clines])
     write_result(args.name, table, paper_table=args.paper, window=args.window, best=args.best,
                  late=args.late, groups=out)
 

@@ -117,6 +117,9 @@ def test_budget_windows_helpers() -> None:
     returns = np.array([0.0, 1.0, 5.0, 0.0, 3.0])
     assert script.best_window_end(returns, 2) == 3  # (1 + 5) / 2 ends at interaction 3
     assert script.window_means(returns, 2) == [0.5, 2.5]  # the unfinished last window is left
+    # Learning metrics: the rows without an update (empty cells, NaN) are left out of a window.
+    loss = np.array([np.nan, np.nan, np.nan, 4.0, 1.0])
+    assert script.column_windows(loss, 2) == [None, 4.0]
     with pytest.raises(ValueError, match="5 interactions; --best 6"):
         script.best_window_end(returns, 6)
     assert script.paper_row("noise", {"step_noise": 0.2}) == (-0.8563, 0.0539)
@@ -135,6 +138,10 @@ def test_budget_windows_on_real_noise_records(tmp_path: Path, monkeypatch) -> No
     assert low["paper"] == [-0.8563, 0.0539] and -2.4 < low["gap_combined_se"] < -2.2
     assert high["env_kwargs"] == {"step_noise": 1.0} and -2.3 < high["gap_combined_se"] < -2.1
     assert len(low["window_means"]) == 5 and low["window_means"][0] < low["window_means"][-1]
+    # Each run's critic loss and Q, window by window: the same windows, every one updated.
+    for run in low["runs"]:
+        assert len(run["critic_loss_windows"]) == len(run["q_windows"]) == 5
+        assert all(c is not None and 0 < c < 1 for c in run["critic_loss_windows"])
     # One seed: no interval to print; no --paper: no paper row.
     (group,) = _run_on_records("budget_windows", [noise.format("0.2", 0)], tmp_path,
                                monkeypatch)["groups"]
