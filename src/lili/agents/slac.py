@@ -59,7 +59,8 @@ what makes a fixed decoder std meaningful for state vectors. Changes of scale, w
   The official sizes are ``{"z2_dim": 256, "feature_dim": 256, "model_hidden": [256, 256]}``.
   Not every task is indifferent to them: on Lunar Lander these sizes leave the lander hovering
   to the horizon more often than the official ones do, and ten times the pretraining does not
-  make up for it (docs/journal, s40: "Lunar Lander SLAC at the official model sizes").
+  make up for it (docs/journal, s40: "Lunar Lander SLAC at the official model sizes"; s42:
+  three seeds of that control, and the official 100,000 steps at the official sizes).
 - ``pretrain_steps`` = 1000 model-only steps after the warm-up (official: 100,000 after 10,000
   random steps, also sized for images). On the 20 warm-up interactions of Point Mass (Driving
   2D) the loss falls from 291 (405) to 15 (3.5) in 1000 steps, 97% (95%) of its fall over 3000

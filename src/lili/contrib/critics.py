@@ -13,7 +13,9 @@ Mass, seeds 0-13). No options (``extra["lili-critic-ln"]`` may only be empty).
 ``lili-flat-encoder-critic-ln`` puts the same critic beside ``lili-flat-encoder``'s encoder
 (:mod:`lili.contrib.latents`), whose critic diverges on some seeds of the history partner from
 N = 7 on (``docs/journal/2026-11-to-12.md``, "The flat encoder at N = 7"), to tell whether a
-normalised critic stops that. Not yet measured.
+normalised critic stops that. Measured at N = 7 (three seeds): no Q climbs, but one seed's
+critic loss still grows and its return falls ("The flat encoder with a layer-normed critic at
+N = 7"); no gain over LILI.
 """
 
 from __future__ import annotations
