@@ -204,17 +204,18 @@ def load_trained(run_dir: str | Path, render_mode: str | None = None
     config: (agent, env, resolved config, interactions the checkpoint holds), for playing a
     trained run (``lili eval``, ``benchmarks/greedy_eval.py``). ValueError (CheckpointError)
     naming the file when the folder, its config, its checkpoint or the agent in it does not
-    fit; the env made for it is closed then."""
+    fit, the env's own error when it cannot be made; an env made for an agent that does not
+    load is closed."""
     from lili.envs.spec import make_env
 
     cfg = read_run_config(run_dir)
     ck, at = latest_checkpoint(run_dir)
+    try:
+        stored = AgentConfig.from_dict(cfg["agent"])
+    except (TypeError, ValueError) as e:
+        raise ValueError(f"{Path(run_dir) / 'config.yaml'}: agent: {e}") from None
     env = make_env(cfg["env"], cfg.get("env_kwargs", {}), render_mode)
     try:
-        try:
-            stored = AgentConfig.from_dict(cfg["agent"])
-        except (TypeError, ValueError) as e:
-            raise ValueError(f"{Path(run_dir) / 'config.yaml'}: agent: {e}") from None
         return load_run_agent(ck, run_dir, env, cfg["algo"], stored), env, cfg, at
     except ValueError:
         env.close()
