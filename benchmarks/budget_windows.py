@@ -104,11 +104,12 @@ def main() -> None:
                             **{f"{k}_windows": column_windows(
                                 np.asarray(run.metrics[k], dtype=float), args.window)
                                for k in CRITIC}})
-            clines.append(f"| {algo} | {setting} | {run.seed} | {per_run[-1]['final']:.2f} | "
-                          + " | ".join(f"{_num(c)} / {_num(q)}" for c, q in zip(
-                              per_run[-1]["critic_loss_windows"], per_run[-1]["q_windows"],
-                              strict=True))
-                          + " |" * (widest - len(per_run[-1]["windows"]) + 1))
+            r = per_run[-1]
+            cells = [f"{_num(c)} / {_num(q)}" for c, q in zip(
+                r["critic_loss_windows"], r["q_windows"], strict=True)]
+            cells += [""] * (widest - len(cells))
+            clines.append(f"| {algo} | {setting} | {run.seed} | {r['final']:.2f} | "
+                          + " | ".join(cells) + " |")
         finals = [r["final"] for r in per_run]
         mean, se = mean_se(finals)
         centre, low, high = iqm_ci(finals)
