@@ -43,20 +43,21 @@ def best_window_end(returns: np.ndarray, width: int) -> int:
     return int(np.argmax(means)) + width
 
 
+def _windows(values: np.ndarray, width: int) -> list[np.ndarray]:
+    """Each whole ``width``-interaction window of ``values`` from the start."""
+    return [values[i:i + width] for i in range(0, len(values) - width + 1, width)]
+
+
 def window_means(returns: np.ndarray, width: int) -> list[float]:
     """The mean return of each whole ``width``-interaction window from the start."""
-    return [float(returns[i:i + width].mean()) for i in range(0, len(returns) - width + 1, width)]
+    return [float(part.mean()) for part in _windows(returns, width)]
 
 
 def column_windows(values: np.ndarray, width: int) -> list[float | None]:
     """The mean of a learning metric over each whole ``width``-interaction window from the
     start, leaving out the rows without an update (empty cells); None for a window without."""
-    out = []
-    for i in range(0, len(values) - width + 1, width):
-        part = values[i:i + width]
-        part = part[~np.isnan(part)]
-        out.append(float(part.mean()) if part.size else None)
-    return out
+    kept = (part[~np.isnan(part)] for part in _windows(values, width))
+    return [float(part.mean()) if part.size else None for part in kept]
 
 
 def _num(v: float | None) -> str:

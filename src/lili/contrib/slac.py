@@ -34,8 +34,8 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
-from lili.agents.registry import register
 from lili.agents.slac import SLAC, SLACCore, SLACOptions
+from lili.contrib.variant import facade
 
 __all__ = ["ObsCriticSLACCore", "ObsCriticSLAC", "FrameActorSLACCore", "FrameActorSLAC",
            "MeanCriticSLACCore", "MeanCriticSLAC", "FrameCriticSLACCore", "FrameCriticSLAC"]
@@ -44,11 +44,8 @@ __all__ = ["ObsCriticSLACCore", "ObsCriticSLAC", "FrameActorSLACCore", "FrameAct
 def _variant(core: type[SLACCore], doc: str) -> type[SLAC]:
     """The facade of ``core``, registered under its ``options_key`` (the variant's algo, under
     which a config's ``extra`` holds its options, SLAC's)."""
-    cls = type(core.__name__.removesuffix("Core"), (SLAC,),
-               {"algo": core.options_key, "core_cls": core, "__doc__": doc,
-                "__module__": __name__})
-    register(core.options_key, cls, options=SLACOptions)
-    return cls
+    return facade(SLAC, core, core.options_key, SLACOptions,
+                  core.__name__.removesuffix("Core"), doc)
 
 
 class ObsCriticSLACCore(SLACCore):

@@ -1,11 +1,12 @@
 """What every variant of :mod:`lili.contrib` shares: a LILI core with options of its own
 (:class:`VariantCore`), the empty options of a variant without any (:class:`NoOptions`), and
-:func:`variant`, which makes a core's facade and registers it under its algo."""
+:func:`variant`, which makes a core's facade and registers it under its algo (through
+:func:`facade`, which the SLAC variants of :mod:`lili.contrib.slac` use too)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, TypeVar
 
 from lili.agents.latent import window_part
 from lili.agents.lili import LILI, LILICore
@@ -13,7 +14,9 @@ from lili.agents.registry import register
 from lili.buffer import Batch, Window
 from lili.config import AgentConfig, dataclass_options
 
-__all__ = ["NoOptions", "VariantCore", "variant"]
+__all__ = ["NoOptions", "VariantCore", "facade", "variant"]
+
+Facade = TypeVar("Facade", bound=type)
 
 
 @dataclass(frozen=True)
@@ -37,10 +40,17 @@ class VariantCore(LILICore):
         return window_part(batch["window"], slice(None, -1))
 
 
+def facade(base: Facade, core: type, algo: str, options: type, name: str, doc: str) -> Facade:
+    """The subclass ``name`` of agent class ``base`` whose core is ``core`` (defined in
+    ``core``'s module), registered under ``algo`` with ``options``' check."""
+    cls = type(name, (base,), {"algo": algo, "core_cls": core, "__doc__": doc,
+                               "__module__": core.__module__})
+    register(algo, cls, options=options)
+    return cls
+
+
 def variant(core: type[VariantCore], doc: str) -> type[LILI]:
     """The facade of ``core``'s variant (in ``core``'s module), registered under its algo with
     its options' check."""
-    cls = type(core.__name__.replace("Core", "LILI"), (LILI,),
-               {"algo": core.algo, "core_cls": core, "__doc__": doc, "__module__": core.__module__})
-    register(core.algo, cls, options=core.options_cls)
-    return cls
+    return facade(LILI, core, core.algo, core.options_cls,
+                  core.__name__.replace("Core", "LILI"), doc)
