@@ -16,6 +16,7 @@ from lili.agents import SLAC, ActingState, LatentState, load_agent, make_agent
 from lili.agents.slac import LatentModel, sample_sequences
 from lili.buffer import InteractionBuffer
 from lili.config import AgentConfig
+from lili.metrics_file import EXTRAS, read_extras
 from lili.runs import RunLogger, load_checkpoint
 from lili.train import train
 
@@ -237,6 +238,55 @@ def test_a_restored_checkpoint_continues_like_the_uninterrupted_run(trained, tmp
     assert first == again and "rep_loss" in first[-1]
 
 
+def test_the_model_terms_and_pretraining_losses_reach_block_extras_and_tensorboard(
+        trained_run, tmp_path):
+    """They are no column of metrics.csv (the ELBO's terms are SLAC's own, the pretraining
+    losses come once), so the run folder keeps them in block_extras.jsonl; a resume keeps the
+    lines of the interactions it keeps."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    agent, rows = trained_run
+    first = FAST["warmup_interactions"] - 1
+    dim = len(rows[0]["strategy"])
+    logger = RunLogger(tmp_path, {}, dim, checkpoint_every=1000)
+    for r in rows:
+        logger.log(r, agent, agent.stream)
+    logger.close()
+    lines = read_extras(tmp_path / EXTRAS)
+    assert [line["interaction"] for line in lines] == list(range(first, len(rows)))
+    for line in lines:
+        r = rows[line["interaction"]]
+        assert {k: v for k, v in line.items() if k != "interaction"} == {
+            k: r[k] for k in ("kl", "obs_nll", "rew_nll", "pretrain_first", "pretrain_last")
+            if k in r}
+    assert "pretrain_first" in lines[0] and not any("pretrain_first" in x for x in lines[1:])
+    assert "kl" not in (tmp_path / "metrics.csv").read_text()
+    # Resumed after the first block: its line stays, in the file and TensorBoard.
+    logger = RunLogger(tmp_path, {}, dim, checkpoint_every=1000, start=first + 1)
+    summary = logger.finish(agent, agent.stream, {"env": "e", "algo": "slac", "seed": 0})
+    assert read_extras(tmp_path / EXTRAS) == lines[:1]
+    assert summary["block_extras"] == {k: v for k, v in lines[0].items() if k != "interaction"}
+    acc = EventAccumulator(str(tmp_path / "tb"), purge_orphaned_data=False)
+    acc.Reload()
+    assert [(e.step, e.value) for e in acc.Scalars("train/pretrain_last")] == [
+        (first, pytest.approx(rows[first]["pretrain_last"], rel=1e-6))]
+    # Resumed before it: the first block runs again, so its line goes.
+    RunLogger(tmp_path, {}, dim, checkpoint_every=1000, start=first).close()
+    assert read_extras(tmp_path / EXTRAS) == []
+
+
+def test_an_edited_block_extras_line_is_named():
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / EXTRAS
+        path.write_text('{"interaction": 2, "pretrain_first": 1.5}\n{"interaction": "x"}\n')
+        with pytest.raises(ValueError, match=r"line 2 .*integer 'interaction'"):
+            read_extras(path)
+        assert read_extras(path.with_name("absent.jsonl")) == []
+
+
 def _rows(path):
     with open(path, newline="") as f:
         return [{k: v for k, v in r.items() if k != "wall_time"} for r in csv.DictReader(f)]
@@ -269,6 +319,7 @@ def test_cli_train_and_resume_give_the_numbers_of_an_uninterrupted_run(tmp_path,
     full = _rows(run / "metrics.csv")
     assert full[-1]["critic_loss"] != "" and full[-1]["rep_loss"] != ""
     assert _rows(copy / "metrics.csv") == full
+    assert read_extras(copy / EXTRAS) == read_extras(run / EXTRAS) != []
     assert lili_train(tmp_path / "full") == 2  # an existing run is not overwritten
 
 

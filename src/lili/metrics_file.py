@@ -6,22 +6,35 @@ reports read it from the run folder instead of recomputing it. Files written bef
 existed are read with :func:`random_column`, the one place where the draw is recomputed from the
 run's ``config.yaml``.
 
+A block of updates may also report statistics that are no column because only one agent has
+them (SLAC's ELBO terms ``kl``, ``obs_nll``, ``rew_nll``) or they come once (SLAC's pretraining
+losses ``pretrain_first`` / ``pretrain_last``, with the run's first block): those go to
+``block_extras.jsonl`` (:data:`EXTRAS`), one JSON line per interaction that reported any, read
+back by :func:`read_extras`.
+
 Only NumPy here: training (:mod:`lili.train`, :mod:`lili.runs`) and the report reader
 (:mod:`lili.report`) both import it, and reading run folders must not pull in the agents.
 """
 
 from __future__ import annotations
 
+import json
+import math
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-__all__ = ["METRIC_COLUMNS", "RANDOM", "metric_columns", "plays_at_random", "random_column",
-           "left_out_of_policy", "warmup_of"]
+__all__ = ["EXTRAS", "METRIC_COLUMNS", "RANDOM", "read_extras", "metric_columns",
+           "plays_at_random", "random_column", "left_out_of_policy", "warmup_of"]
 
 METRIC_COLUMNS = ("critic_loss", "actor_loss", "alpha", "rep_loss", "q", "entropy")
 """The statistics of an interaction's block of updates (empty before the first update)."""
+
+EXTRAS = "block_extras.jsonl"
+"""The run folder's file of the statistics a block reports beyond :data:`METRIC_COLUMNS`: one
+JSON object per line, ``{"interaction": i, name: value, ...}``."""
 
 RANDOM = "random"
 """The column that says whether an interaction was played with uniform random actions (1: the
@@ -76,3 +89,26 @@ def left_out_of_policy(random: np.ndarray, warmup: int) -> np.ndarray:
     warm-up. The warm-up stays in, since it starts every run's curve."""
     random = np.asarray(random, bool)
     return random & (np.arange(random.size) >= warmup)
+
+
+def read_extras(path: str | Path, before: int | None = None) -> list[dict[str, float]]:
+    """The lines of a ``block_extras.jsonl`` (none if the file does not exist), those of
+    interactions below ``before`` only when it is given. Raises ``ValueError`` naming the line
+    when one is not an object of an integer ``interaction`` and finite numbers."""
+    path = Path(path)
+    if not path.exists():
+        return []
+    lines = []
+    for n, text in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+        try:
+            line = json.loads(text)
+        except json.JSONDecodeError:
+            line = None
+        ok = (isinstance(line, dict) and type(line.get("interaction")) is int
+              and all(type(v) in (int, float) and math.isfinite(v) for v in line.values()))
+        if not ok:
+            raise ValueError(f"{path} line {n} is {text[:80]!r}; expected a JSON object of an "
+                             "integer 'interaction' and finite numbers (was it edited?)")
+        if before is None or line["interaction"] < before:
+            lines.append(line)
+    return lines

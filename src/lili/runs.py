@@ -11,6 +11,9 @@
   (``stream.npz``: replay buffer, action log, wall time), plus ``latest.json`` pointing at it;
   the pointer is replaced atomically after the checkpoint is complete, so a run killed at any
   moment loses at most one checkpoint interval.
+- ``block_extras.jsonl``: what a block of updates reports beyond the columns (SLAC's ELBO terms
+  and pretraining losses; :data:`lili.metrics_file.EXTRAS`), also in TensorBoard and, the
+  newest value of each, in ``summary.json``'s ``block_extras``.
 - ``summary.json``: final metrics, versions, git commit, wall time.
 
 Resuming (:func:`resume_run`) checks everything it reads (config, pointer, both checkpoint
@@ -42,11 +45,13 @@ from lili.agents.sac import SAC
 from lili.config import AgentConfig
 from lili.errors import shown
 from lili.metrics_file import (
+    EXTRAS,
     METRIC_COLUMNS,
     RANDOM,
     left_out_of_policy,
     metric_columns,
     random_column,
+    read_extras,
 )
 from lili.train import Stream
 from lili.yaml_bounds import YAMLTooLarge, safe_load
@@ -295,7 +300,16 @@ def resume_run(run_dir: str | Path, agent: SAC, stream: Stream,
     n = load_checkpoint(run_dir, agent, stream)
     path = run_dir / "metrics.csv"
     _check_logged(path, _read_rows(path, metric_columns(strategy_dim))[0], stream, n)
+    try:
+        read_extras(run_dir / EXTRAS, n)
+    except (ValueError, OSError, UnicodeDecodeError) as e:
+        raise CheckpointError(f"{e}; restore the file or start a new run") from None
     return n
+
+
+_ROW_KEYS = frozenset({"interaction", "return", "length", "success", RANDOM, "strategy",
+                       "strategy_id", "wall_time", *METRIC_COLUMNS})
+"""The keys of a training row that ``metrics.csv`` holds; any other goes to ``block_extras``."""
 
 
 class RunLogger:
@@ -347,6 +361,12 @@ class RunLogger:
                          None if r[success] == "" else float(r[success]),
                          {k: float(cells[k]) for k in METRIC_COLUMNS if cells.get(k, "") != ""})
         self.random = [r[self.columns.index(RANDOM)] == "1" for r in rows]
+        extras = read_extras(self.dir / EXTRAS, start) if start > 0 else []
+        self.extras: dict[str, float] = {}
+        with (self.dir / EXTRAS).open("w") as f:
+            for line in extras:
+                f.write(json.dumps(line) + "\n")
+                self._record_extras(line)
 
     def _record(self, i: int, ret: float, success: float | bool | None,
                 metrics: dict[str, float]) -> None:
@@ -359,6 +379,14 @@ class RunLogger:
             self.tb.add_scalar("interaction/success", float(success), i)
         for k, v in metrics.items():
             self.tb.add_scalar(f"train/{k}", v, i)
+
+    def _record_extras(self, line: dict[str, Any]) -> None:
+        """One ``block_extras.jsonl`` line into TensorBoard and the newest values."""
+        i = line["interaction"]
+        for k, v in line.items():
+            if k != "interaction":
+                self.extras[k] = v
+                self.tb.add_scalar(f"train/{k}", v, i)
 
     def log(self, row: dict[str, Any], agent: SAC, stream: Stream) -> None:
         """Append one interaction's row; checkpoint every ``checkpoint_every`` interactions."""
@@ -376,6 +404,12 @@ class RunLogger:
         self._csv_file.flush()
         self._record(i, row["return"], success, {k: row[k] for k in METRIC_COLUMNS if k in row})
         self.random.append(bool(row["random"]))
+        extras = {k: float(v) for k, v in row.items() if k not in _ROW_KEYS}
+        if extras:
+            line = {"interaction": i, **extras}
+            with (self.dir / EXTRAS).open("a") as f:
+                f.write(json.dumps(line) + "\n")
+            self._record_extras(line)
         if (i + 1) % self.checkpoint_every == 0:
             self.checkpoint(agent, stream)
 
@@ -416,6 +450,7 @@ class RunLogger:
             "final_return": _final(self.returns),
             "final_success": _final(self.successes),
             **self._policy_only(agent),
+            **({"block_extras": dict(self.extras)} if self.extras else {}),
             "wall_time_s": round(stream.wall_time, 2),
             "cpu_time_s": (round(stream.cpu_time, 2) if np.isfinite(stream.cpu_time)
                            else None),

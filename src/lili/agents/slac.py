@@ -592,7 +592,8 @@ class SLACCore(SACCore):
         """One fused block of updates; before the very first one, ``pretrain_steps`` model-only
         steps (a function of the state, so a resumed run repeats exactly what it would have).
         The first block's metrics then carry ``pretrain_first`` and ``pretrain_last``, the
-        pretraining's first and last loss."""
+        pretraining's first and last loss (a run folder keeps them, as the ELBO's terms, in
+        ``block_extras.jsonl``)."""
         steps = self.options.pretrain_steps
         extra: dict[str, float] = {}
         if steps > 0 and int(state.updates) == 0:
