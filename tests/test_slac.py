@@ -270,21 +270,17 @@ def test_the_model_terms_and_pretraining_losses_reach_block_extras_and_tensorboa
     acc.Reload()
     assert [(e.step, e.value) for e in acc.Scalars("train/pretrain_last")] == [
         (first, pytest.approx(rows[first]["pretrain_last"], rel=1e-6))]
-    # Resumed before it: the first block runs again, so its line goes.
+    # Resumed before it: the first block runs again, so its line goes, and with it the file.
     RunLogger(tmp_path, {}, dim, checkpoint_every=1000, start=first).close()
-    assert read_extras(tmp_path / EXTRAS) == []
+    assert not (tmp_path / EXTRAS).exists()
 
 
-def test_an_edited_block_extras_line_is_named():
-    import tempfile
-    from pathlib import Path
-
-    with tempfile.TemporaryDirectory() as d:
-        path = Path(d) / EXTRAS
-        path.write_text('{"interaction": 2, "pretrain_first": 1.5}\n{"interaction": "x"}\n')
-        with pytest.raises(ValueError, match=r"line 2 .*integer 'interaction'"):
-            read_extras(path)
-        assert read_extras(path.with_name("absent.jsonl")) == []
+def test_an_edited_block_extras_line_is_named(tmp_path):
+    path = tmp_path / EXTRAS
+    path.write_text('{"interaction": 2, "pretrain_first": 1.5}\n{"interaction": "x"}\n')
+    with pytest.raises(ValueError, match=r"line 2 .*integer 'interaction'"):
+        read_extras(path)
+    assert read_extras(path.with_name("absent.jsonl")) == []
 
 
 def _rows(path):

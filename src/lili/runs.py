@@ -33,7 +33,7 @@ import shutil
 import subprocess
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, TextIO
 
 import numpy as np
 import yaml
@@ -361,12 +361,14 @@ class RunLogger:
                          None if r[success] == "" else float(r[success]),
                          {k: float(cells[k]) for k in METRIC_COLUMNS if cells.get(k, "") != ""})
         self.random = [r[self.columns.index(RANDOM)] == "1" for r in rows]
-        extras = read_extras(self.dir / EXTRAS, start) if start > 0 else []
+        # Opened on the first line to write, so that runs whose blocks report nothing beyond the
+        # columns get no file; a resume keeps the lines of the interactions it keeps.
         self.extras: dict[str, float] = {}
-        with (self.dir / EXTRAS).open("w") as f:
-            for line in extras:
-                f.write(json.dumps(line) + "\n")
-                self._record_extras(line)
+        self._extras_file: TextIO | None = None
+        kept = read_extras(self.dir / EXTRAS, start) if start > 0 else []
+        (self.dir / EXTRAS).unlink(missing_ok=True)
+        for line in kept:
+            self._write_extras(line)
 
     def _record(self, i: int, ret: float, success: float | bool | None,
                 metrics: dict[str, float]) -> None:
@@ -380,8 +382,12 @@ class RunLogger:
         for k, v in metrics.items():
             self.tb.add_scalar(f"train/{k}", v, i)
 
-    def _record_extras(self, line: dict[str, Any]) -> None:
-        """One ``block_extras.jsonl`` line into TensorBoard and the newest values."""
+    def _write_extras(self, line: dict[str, Any]) -> None:
+        """One ``block_extras.jsonl`` line into the file, TensorBoard and the newest values."""
+        if self._extras_file is None:
+            self._extras_file = (self.dir / EXTRAS).open("a")
+        self._extras_file.write(json.dumps(line) + "\n")
+        self._extras_file.flush()
         i = line["interaction"]
         for k, v in line.items():
             if k != "interaction":
@@ -406,10 +412,7 @@ class RunLogger:
         self.random.append(bool(row["random"]))
         extras = {k: float(v) for k, v in row.items() if k not in _ROW_KEYS}
         if extras:
-            line = {"interaction": i, **extras}
-            with (self.dir / EXTRAS).open("a") as f:
-                f.write(json.dumps(line) + "\n")
-            self._record_extras(line)
+            self._write_extras({"interaction": i, **extras})
         if (i + 1) % self.checkpoint_every == 0:
             self.checkpoint(agent, stream)
 
@@ -473,3 +476,5 @@ class RunLogger:
     def close(self) -> None:
         self.tb.close()
         self._csv_file.close()
+        if self._extras_file is not None:
+            self._extras_file.close()
