@@ -56,7 +56,7 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
     ("success_by_strategy", ["run"]), ("drift_lagged", []), ("run_cost", []),
     ("boundary_probe", ["run"]), ("target_spread", ["run"]),
     ("budget_windows", ["run"]), ("steer_sides", ["run"]), ("interaction_ends", ["run"]),
-    ("greedy_eval", ["run"])])
+    ("greedy_eval", ["run"]), ("slac_belief", ["run"]), ("metric_departures", ["run"])])
 @pytest.mark.parametrize("name", ["../x", "/tmp/x", ".hidden", ""])
 def test_result_name_must_be_a_plain_file_name(script: str, args: list[str], name: str,
                                                monkeypatch, capsys) -> None:
@@ -536,3 +536,90 @@ def test_greedy_eval_plays_each_checkpoint_sampled_and_deterministic(tmp_path: P
     assert f"run {record}: " in err and "has no checkpoint" in err
     assert err.rstrip().endswith("allowed: a run folder of lili train with its checkpoints")
     assert not (tmp_path / "g.json").exists()
+
+
+def test_slac_belief_r2_and_linear_probe_on_known_cases() -> None:
+    script = _script("slac_belief")
+    rng = np.random.default_rng(0)
+    z = rng.normal(size=(50, 3))
+    x = np.stack([z @ [1.0, -2.0, 0.5] + 3.0, np.ones(50)], 1)  # linear in z; a constant
+    r2 = script.r2(script.linear_probe(z, x, z), x)
+    assert r2[0] == pytest.approx(1.0) and np.isnan(r2[1])  # a column that never varies: NaN
+    assert script.r2(np.full((50, 1), x[:, :1].mean()), x[:, :1])[0] == pytest.approx(0.0)
+    assert script.r2(-x[:, :1], x[:, :1])[0] < 0  # worse than the mean is negative
+    assert np.isnan(script.r2(x[:0], x[:0])).all()  # nothing to score
+
+
+def test_slac_belief_reads_a_slac_checkpoint_and_refuses_other_runs(tmp_path: Path, monkeypatch,
+                                                                    capsys) -> None:
+    from lili import cli
+
+    shared = "warmup_interactions: 3\nhidden: [16]\ncheckpoint_every: 6\n"
+    out = tmp_path / "o"
+    for algo, extra in (("slac", "extra:\n  slac: {z2_dim: 8, feature_dim: 8, model_hidden: "
+                                 "[16, 16], pretrain_steps: 5, decoder_std: 0.5}\n"),
+                        ("sac", "")):
+        cfg = tmp_path / f"{algo}.yaml"
+        cfg.write_text(shared + extra)
+        assert cli.main(["train", "point-mass", "--algo", algo, "--interactions", "6", "--out",
+                         str(out), "--config", str(cfg), "--no-progress"]) == 0
+    slac, sac = (out / "PointMass-v0" / a / "seed_0" for a in ("slac", "sac"))
+    script = _script("slac_belief")
+    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
+    rows = []
+    for _ in range(2):
+        monkeypatch.setattr("sys.argv", ["x", str(slac), "--window", "5", "--name", "b"])
+        script.main()
+        rows.append(json.loads((tmp_path / "b.json").read_text())["runs"])
+    assert rows[0] == rows[1]  # a fixed key: the same checkpoint gives the same scores
+    (row,) = rows[0]
+    assert row["checkpoint"] == 6 and row["decoder_std"] == 0.5
+    assert row["interactions"] == [1, 5] and row["steps"] > 0
+    assert len(row["decoder_r2"]) == len(row["linear_r2"]) == len(row["decoder_rms"]) == 2
+    # Point Mass's interactions all run to the horizon: no contact ends, nothing to score there.
+    assert row["near_steps"] == 0 and row["decoder_r2_near"] == [None, None]
+    assert all(v is None or v <= 1.0 for v in row["decoder_r2"] + row["linear_r2"])
+    assert all(v >= 0.0 for v in row["decoder_rms"])
+    # Another agent's run, or a window longer than the buffer, is refused before any probe.
+    (tmp_path / "b.json").unlink()
+    for argv, message in (([str(slac), str(sac), "--window", "5"],
+                           f"run {sac} is a 'sac' run; allowed: SLAC"),
+                          ([str(slac), "--window", "7"],
+                           "holds 6 interactions; allowed: --window at most that")):
+        monkeypatch.setattr("sys.argv", ["x", *argv, "--name", "b"])
+        with pytest.raises(SystemExit):
+            script.main()
+        assert message in capsys.readouterr().err
+    assert not (tmp_path / "b.json").exists()
+
+
+def test_metric_departures_finds_the_first_window_above_the_early_level() -> None:
+    departure = _script("metric_departures").departure
+    v = np.full(1000, 1.0)
+    v[:3] = np.nan  # before the first update
+    assert departure(v, 100, 300, 500, 2.0) is None
+    v[720:] = 3.0  # the window 700-799 averages 2.6: the first one above twice the level
+    assert departure(v, 100, 300, 500, 2.0) == 700
+    assert departure(v, 100, 300, 500, 5.0) is None
+
+
+def test_metric_departures_on_real_flat_encoder_records(tmp_path: Path, monkeypatch,
+                                                        capsys) -> None:
+    runs = ["s45/history-flat-ln/n_11/PointMass-v0/lili-flat-encoder-critic-ln/seed_*"]
+    result = _run_on_records("metric_departures", runs, tmp_path, monkeypatch)
+    rows = {r["run"].rsplit("_", 1)[1]: r for r in result["runs"]}
+    # Seed 2 fails (its return falls below the others'): its critic's loss leaves its early
+    # level first, its decoder's later; on the two that learn neither does.
+    assert rows["2"]["critic_loss"] < rows["2"]["rep_loss"]
+    assert rows["2"]["final_200"] < min(rows["0"]["final_200"], rows["1"]["final_200"])
+    assert all(rows[s][m] is None for s in "01" for m in ("critic_loss", "rep_loss"))
+    record = str(BENCH / "results/runs" / runs[0].replace("*", "0"))
+    for argv, message in (([record, "--factor", "1"], "--factor 1.0 is invalid"),
+                          ([record, "--metrics", "bogus"], "logs no bogus; allowed: "),
+                          ([record, "--base-from", "600"], "--base-from 600 is invalid; allowed: "
+                                                           "below --base-to (500)")):
+        monkeypatch.setattr("sys.argv", ["x", *argv, "--name", "d"])
+        with pytest.raises(SystemExit):
+            _script("metric_departures").main()
+        assert message in capsys.readouterr().err
+    assert not (tmp_path / "d.json").exists()
