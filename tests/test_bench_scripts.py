@@ -38,6 +38,20 @@ def _run_on_records(name: str, runs: list[str], tmp_path: Path, monkeypatch,
     return json.loads((tmp_path / "r.json").read_text())
 
 
+def _rows_twice(name: str, argv: list[str], tmp_path: Path, monkeypatch) -> list[list[dict]]:
+    """Run benchmark script ``name`` twice with ``argv`` (``--name r`` added), writing under
+    ``tmp_path``; each run's ``runs`` rows (a script that plays or probes a checkpoint must give
+    the same rows twice)."""
+    script = _script(name)
+    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
+    rows = []
+    for _ in range(2):
+        monkeypatch.setattr("sys.argv", ["x", *argv, "--name", "r"])
+        script.main()
+        rows.append(json.loads((tmp_path / "r.json").read_text())["runs"])
+    return rows
+
+
 def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> None:
     merged = _script("influence").merged
     path = tmp_path / "r.json"
@@ -512,12 +526,7 @@ def test_greedy_eval_plays_each_checkpoint_sampled_and_deterministic(tmp_path: P
                      "--out", str(tmp_path / "o"), "--config", str(cfg), "--no-progress"]) == 0
     run = tmp_path / "o" / "InfluenceDrift-v0" / "oracle" / "seed_0"
     script = _script("greedy_eval")
-    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
-    rows = []
-    for _ in range(2):
-        monkeypatch.setattr("sys.argv", ["x", str(run), "--interactions", "6", "--name", "g"])
-        script.main()
-        rows.append(json.loads((tmp_path / "g.json").read_text())["runs"])
+    rows = _rows_twice("greedy_eval", [str(run), "--interactions", "6"], tmp_path, monkeypatch)
     (row,) = rows[0]
     assert rows[0] == rows[1]  # the same checkpoint and env seed play the same interactions
     assert row["checkpoint"] == 8 and row["algo"] == "oracle"
@@ -527,7 +536,7 @@ def test_greedy_eval_plays_each_checkpoint_sampled_and_deterministic(tmp_path: P
     for key in ("training_held", "sampled_held", "deterministic_held"):
         assert 0.0 <= row[key] <= 1.0
     # A folder without checkpoints (a committed record) is refused before anything plays.
-    (tmp_path / "g.json").unlink()
+    (tmp_path / "r.json").unlink()
     record = BENCH / "results/runs/s11/influence/InfluenceDrift-v0/oracle/seed_0"
     monkeypatch.setattr("sys.argv", ["x", str(run), str(record), "--name", "g"])
     with pytest.raises(SystemExit):
@@ -565,12 +574,7 @@ def test_slac_belief_reads_a_slac_checkpoint_and_refuses_other_runs(tmp_path: Pa
                          str(out), "--config", str(cfg), "--no-progress"]) == 0
     slac, sac = (out / "PointMass-v0" / a / "seed_0" for a in ("slac", "sac"))
     script = _script("slac_belief")
-    monkeypatch.setattr(sys.modules["_results"], "RESULTS", tmp_path)
-    rows = []
-    for _ in range(2):
-        monkeypatch.setattr("sys.argv", ["x", str(slac), "--window", "5", "--name", "b"])
-        script.main()
-        rows.append(json.loads((tmp_path / "b.json").read_text())["runs"])
+    rows = _rows_twice("slac_belief", [str(slac), "--window", "5"], tmp_path, monkeypatch)
     assert rows[0] == rows[1]  # a fixed key: the same checkpoint gives the same scores
     (row,) = rows[0]
     assert row["checkpoint"] == 6 and row["decoder_std"] == 0.5
@@ -581,7 +585,7 @@ def test_slac_belief_reads_a_slac_checkpoint_and_refuses_other_runs(tmp_path: Pa
     assert all(v is None or v <= 1.0 for v in row["decoder_r2"] + row["linear_r2"])
     assert all(v >= 0.0 for v in row["decoder_rms"])
     # Another agent's run, or a window longer than the buffer, is refused before any probe.
-    (tmp_path / "b.json").unlink()
+    (tmp_path / "r.json").unlink()
     for argv, message in (([str(slac), str(sac), "--window", "5"],
                            f"run {sac} is a 'sac' run; allowed: SLAC"),
                           ([str(slac), "--window", "7"],

@@ -124,8 +124,13 @@ def test_presets_write_their_departures_and_the_paper_setting_is_one_flag_away(t
     assert all(s.agent["random_interactions"] == 0.0 for s in literal)
     lander = plan(get_preset("lunar-lander"), tmp_path, seeds=1)
     assert {s.agent["boundary_discount"] for s in lander} == {"horizon"}
-    assert {s.agent["boundary_discount"] for s in plan(
-        get_preset("lunar-lander"), tmp_path, seeds=1, paper_settings=True)} == {"step"}
+    literal_lander = plan(get_preset("lunar-lander"), tmp_path, seeds=1, paper_settings=True)
+    assert {s.agent["boundary_discount"] for s in literal_lander} == {"step"}
+    # SLAC's own option reaches SLAC's runs alone; the paper's setting drops it.
+    assert {s.algo: s.agent["extra"] for s in lander}["slac"] == {"slac": {"decoder_std": 0.1}}
+    assert all(s.agent["extra"] == {} for s in lander if s.algo != "slac")
+    assert all(s.agent["extra"] == {} for s in literal_lander)
+    assert "`extra.slac.decoder_std=0.1`" in get_preset("lunar-lander").departs()
     # The paper preset is made of the parts, each with its own departures.
     paper = {s.run_dir: s for s in plan(get_preset("paper"), tmp_path, seeds=1)}
     assert all(paper[s.run_dir].interactions == 3000 for s in hockey)
