@@ -33,7 +33,8 @@ import numpy as np
 from _results import records_args, write_result
 
 from lili.agents.slac import LatentModel, SLACCore, gather_sequences
-from lili.runs import latest_checkpoint, load_trained
+from lili.runs import load_checkpoint, load_trained
+from lili.train import Stream
 
 OBS_NAMES = {8: ("x", "y", "vx", "vy", "angle", "ang. vel.", "left leg", "right leg")}
 """Names of the observation's dimensions where the env's are known (Lunar Lander's eight)."""
@@ -59,9 +60,9 @@ def linear_probe(z_fit: np.ndarray, x_fit: np.ndarray, z: np.ndarray) -> np.ndar
 def critic_latents(core: SLACCore, state, arrays: dict[str, jax.Array], slots: np.ndarray,
                    seed: int = 0) -> dict[str, np.ndarray]:
     """For every valid step of the interactions in buffer ``slots``: the critic's latent z_t,
-    z_t+1, the network frame x_t, the decoder's mean at z_t, the reward model's mean and the
-    normalised reward; plus each step's interaction (its position in ``slots``), t and the
-    interaction's length."""
+    the network frame x_t, the decoder's mean at z_t, the reward model's mean (from z_t, a_t
+    and z_t+1) and the normalised reward; plus each step's interaction (its position in
+    ``slots``), t and the interaction's length."""
     length = np.asarray(arrays["length"])[slots]
     rows = [(i, s, t) for i, s in enumerate(slots) for t in range(int(length[i]))]
     which, slot, t = (np.array(v) for v in zip(*rows, strict=True))
@@ -123,30 +124,26 @@ def main() -> None:
     for folder in folders:  # every run checked before any is probed
         try:
             agent, env, cfg, at = load_trained(folder)
+            stream = Stream.for_agent(agent, env)  # the replay buffer the checkpoint holds
+            env.close()
+            load_checkpoint(folder, agent, stream)
         except ValueError as e:
             p.error(f"run {folder}: {e}; allowed: a run folder of lili train with its checkpoints")
-        env.close()
         if not isinstance(agent.core, SLACCore):
             p.error(f"run {folder} is a {cfg['algo']!r} run; allowed: SLAC or a SLAC variant")
-        ck, _ = latest_checkpoint(folder)
-        with np.load(ck / "stream.npz", allow_pickle=False) as z:
-            buf = {k[len("buffer."):]: z[k] for k in z.files
-                   if k.startswith("buffer.") and k != "buffer.count"}
-        if len(buf["length"]) < args.window:
-            p.error(f"run {folder} holds {len(buf['length'])} interactions; allowed: --window "
+        if stream.count < args.window:
+            p.error(f"run {folder} holds {stream.count} interactions; allowed: --window "
                     f"at most that")
-        loaded.append((folder, agent, cfg, at, buf))
+        loaded.append((folder, agent, cfg, at, stream.buffer))
     out = []
     for folder, agent, cfg, at, buf in loaded:
-        arrays = {k: jnp.asarray(v) for k, v in buf.items()}
-        n = len(buf["length"])
+        n = buf.count
         slots = np.arange(n - args.window, n)
-        d = critic_latents(agent.core, agent.state, arrays, slots)
-        obs_dim, horizon = buf["obs"].shape[2], buf["obs"].shape[1]
+        d = critic_latents(agent.core, agent.state, buf.arrays, slots % buf.capacity)
         row = {"run": folder, "algo": cfg["algo"], "seed": cfg["seed"], "checkpoint": at,
                "decoder_std": agent.core.options.decoder_std,
                "interactions": [int(slots[0]), int(slots[-1])],
-               **belief_scores(d, args.window, horizon, args.last, obs_dim)}
+               **belief_scores(d, args.window, buf.horizon, args.last, buf.obs_dim)}
         out.append(row)
     obs_dim = len(out[0]["decoder_r2"])
     names = OBS_NAMES.get(obs_dim, tuple(f"x{i}" for i in range(obs_dim)))
