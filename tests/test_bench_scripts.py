@@ -68,7 +68,7 @@ def test_influence_merge_keeps_earlier_rows_and_new_ones_win(tmp_path: Path) -> 
 @pytest.mark.parametrize(("script", "args"), [
     ("play_bot", ["a=scripted:greedy"]), ("latent_probe", ["run"]), ("influence", []),
     ("success_by_strategy", ["run"]), ("drift_lagged", []), ("run_cost", []),
-    ("boundary_probe", ["run"]), ("target_spread", ["run"]),
+    ("boundary_probe", ["run"]), ("target_spread", ["run"]), ("target_cost", ["run"]),
     ("budget_windows", ["run"]), ("steer_sides", ["run"]), ("interaction_ends", ["run"]),
     ("greedy_eval", ["run"]), ("slac_belief", ["run"]), ("metric_departures", ["run"])])
 @pytest.mark.parametrize("name", ["../x", "/tmp/x", ".hidden", ""])
@@ -124,6 +124,32 @@ def test_target_spread_on_real_oracle_records(tmp_path: Path, monkeypatch) -> No
     assert b["return_seldom"] < b["return_often"] - 0.05
     with pytest.raises(SystemExit):
         _run_on_records("target_spread", [plain], tmp_path, monkeypatch, "--last", "1900")
+
+
+def test_target_cost_splits_real_oracle_records(tmp_path: Path, monkeypatch) -> None:
+    from lili.envs.influence.point_mass import KNOWN_RETURNS
+
+    cost = _script("target_cost").ReachCost()
+    # The greedy policy's cost round the whole circle is the documented greedy return, and the
+    # top of the circle (next to the start) is the cheapest target.
+    angles = np.linspace(0, 2 * np.pi, 720, endpoint=False)
+    assert abs(np.mean([cost(a) for a in angles]) - KNOWN_RETURNS["greedy"]) < 1e-3
+    assert cost(np.pi / 2) > cost(0.0) > cost(3 * np.pi / 2)
+    plain = "bench_point_mass/PointMass-v0/oracle/seed_0"
+    long = "s32/history-oracle/n_11/PointMass-v0/oracle/seed_0"
+    a, b = _run_on_records("target_cost", [plain, long], tmp_path, monkeypatch)["runs"]
+    for row in (a, b):
+        assert abs(row["return"] - row["reach_cost"] - row["shortfall"]) < 1e-9
+        assert row["n_often"] + row["n_seldom"] == 200
+    # At N = 1 the Oracle holds the target at the top; at N = 11 the majority of eleven
+    # outcomes walks it further, so the targets it meets cost more even to reach greedily.
+    assert a["reach_cost"] > -0.1 and b["reach_cost"] < a["reach_cost"] - 0.05
+    assert b["shortfall_seldom"] < b["shortfall_often"]
+    with pytest.raises(SystemExit):
+        _run_on_records("target_cost", [plain], tmp_path, monkeypatch, "--last", "1900")
+    with pytest.raises(SystemExit):
+        _run_on_records("target_cost", ["s13/air-hockey-rerun/AirHockey-v0/lili/seed_1"],
+                        tmp_path, monkeypatch)
 
 
 def test_budget_windows_helpers() -> None:
