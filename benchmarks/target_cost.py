@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 from _results import records_args, write_result
-from target_spread import sectors, spread
+from target_spread import partner_setting, sectors, spread
 
 from lili.envs.influence.point_mass import SCRIPTED
 from lili.envs.point_mass import CENTER, PointMassEnv
@@ -54,9 +54,9 @@ class ReachCost:
 
 
 def target_angles(run_metrics: dict[str, np.ndarray]) -> np.ndarray:
-    """The target's angle round the circle's centre at every interaction (radians)."""
-    if run_metrics.get("strategy_0") is None or run_metrics.get("strategy_1") is None:
-        raise ValueError("the run logs no two-dimensional partner strategy (strategy_0/1)")
+    """The target's angle round the circle's centre at every interaction (radians); the run's
+    strategy columns are checked by :func:`target_spread.sectors`, which :func:`split` calls
+    first."""
     return np.arctan2(run_metrics["strategy_1"] - CENTER[1], run_metrics["strategy_0"] - CENTER[0])
 
 
@@ -88,8 +88,7 @@ def main() -> None:
             row = split(run.metrics, args.last, args.history, cost)
         except ValueError as e:
             p.error(f"{folder}: {e}")
-        kwargs = run.config.get("env_kwargs") or {}
-        setting = ", ".join(f"{k}={v}" for k, v in sorted(kwargs.items())) or "-"
+        kwargs, setting = partner_setting(run.config)
         out.append({"run": folder, "algo": run.algo, "seed": run.seed, "env_kwargs": kwargs,
                     "interactions": len(run.metrics["return"]), **row})
         lines.append(f"| {folder} | {setting} | {row['return']:.3f} | {row['reach_cost']:.3f} | "

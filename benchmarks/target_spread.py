@@ -48,6 +48,12 @@ def spread(returns: np.ndarray, sector: np.ndarray, last: int, history: int) -> 
             "n_often": int(often.sum()), "n_seldom": int((~often).sum())}
 
 
+def partner_setting(config: dict) -> tuple[dict, str]:
+    """A run's env options (its config's ``env_kwargs``) and how the tables print them."""
+    kwargs = config.get("env_kwargs") or {}
+    return kwargs, ", ".join(f"{k}={v}" for k, v in sorted(kwargs.items())) or "-"
+
+
 def main() -> None:
     p, args, folders = records_args(__doc__, "target_spread", {"last": 200, "history": 800})
     out, lines = [], []
@@ -57,8 +63,7 @@ def main() -> None:
             row = spread(run.metrics["return"], sectors(run.metrics), args.last, args.history)
         except ValueError as e:
             p.error(f"{folder}: {e}")
-        kwargs = run.config.get("env_kwargs") or {}
-        setting = ", ".join(f"{k}={v}" for k, v in sorted(kwargs.items())) or "-"
+        kwargs, setting = partner_setting(run.config)
         out.append({"run": folder, "env": run.env, "algo": run.algo, "seed": run.seed,
                     "env_kwargs": kwargs, **row})
         lines.append(f"| {folder} | {setting} | {row['return']:.3f} | {row['sectors']} | "
